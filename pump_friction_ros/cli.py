@@ -1,0 +1,251 @@
+"""Command line ``pump_friction``: the paper's units (rpm, bar, cSt) live here and only here."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .errors import PumpFrictionError
+from .model import COMPONENTS, PumpModel
+from .params import load_pump
+from .units import (
+    CC_TO_M3,
+    MM_TO_M,
+    bar_to_pa,
+    cst_to_m2_s,
+    rpm_to_rad_s,
+)
+
+__all__ = ['main']
+
+MAX_SPEED_RPM = 100_000.0
+MAX_PRESSURE_BAR = 2_000.0
+MAX_VISCOSITY_CST = 10_000.0
+
+
+class UsageError(PumpFrictionError):
+    """A bad command-line argument."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """Argument parser that reports a bad argument in one line and exits with code 2."""
+
+    def error(self, message: str) -> None:
+        """Raise `UsageError` instead of printing usage and exiting."""
+        raise UsageError(f'{message} (see {self.prog} --help)')
+
+
+def _bounded_float(name: str, low: float, high: float) -> Callable[[str], float]:
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'{name} must be a number, got {text!r}') from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f'{name} must be finite, got {text!r}')
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f'{name} must be in [{low:g}, {high:g}], '
+                                             f'got {value:g}')
+        return value
+
+    return parse
+
+
+_speed = _bounded_float('--speed-rpm', -MAX_SPEED_RPM, MAX_SPEED_RPM)
+_pressure = _bounded_float('--pressure-bar', -MAX_PRESSURE_BAR, MAX_PRESSURE_BAR)
+_viscosity = _bounded_float('--viscosity-cst', 1e-3, MAX_VISCOSITY_CST)
+
+
+def _json_number(value: float) -> float | None:
+    """Finite floats as they are, NaN as JSON null."""
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _model(args: argparse.Namespace) -> PumpModel:
+    return PumpModel(load_pump(args.pump))
+
+
+def _viscosity_m2_s(args: argparse.Namespace, model: PumpModel) -> float:
+    if args.viscosity_cst is None:
+        return model.params.oil.viscosity_m2_s
+    return cst_to_m2_s(args.viscosity_cst)
+
+
+def _cmd_paper_check(args: argparse.Namespace) -> int:
+    from .paper import format_checks, paper_checks
+
+    model = _model(args)
+    rows = paper_checks(model)
+    if args.json:
+        print(json.dumps([{'quantity': r.quantity, 'unit': r.unit, 'paper': r.paper,
+                           'model': r.model, 'relative_difference': r.relative_difference,
+                           'kind': r.kind, 'tolerance': r.tolerance, 'holds': r.holds,
+                           'source': r.source, 'note': r.note} for r in rows], indent=2))
+    else:
+        print(format_checks(rows, model.params.name))
+    return 0
+
+
+def torque_record(model: PumpModel, speed_rad_s: float, pressure_pa: float,
+                  viscosity_m2_s: float) -> dict[str, float | None]:
+    """Revolution-mean torques of one operating point, keyed as in ``torque --json``.
+
+    Parameters
+    ----------
+    model : PumpModel
+        The pump model.
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    pressure_pa : float
+        Pressure difference [Pa].
+    viscosity_m2_s : float
+        Oil kinematic viscosity [m^2/s].
+
+    Returns
+    -------
+    dict
+        Signed torques [N*m] and efficiency [-] (None when undefined).
+    """
+    res = model.evaluate(speed_rad_s, pressure_pa, viscosity_m2_s)
+    record = {'theoretical_nm': res.theoretical_nm[0]}
+    record.update({f'{c}_nm': res.component_nm(c)[0] for c in COMPONENTS})
+    record.update(friction_nm=res.friction_nm[0], input_nm=res.input_nm[0],
+                  efficiency=res.efficiency[0])
+    return {k: _json_number(v) for k, v in record.items()}
+
+
+def _print_record(record: dict[str, float | None], header: str, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(record, indent=2))
+        return
+    print(header)
+    for key, value in record.items():
+        shown = 'undefined' if value is None else f'{value:.6g}'
+        print(f'  {key:<24} {shown}')
+
+
+def _cmd_torque(args: argparse.Namespace) -> int:
+    model = _model(args)
+    record = torque_record(model, rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar),
+                           _viscosity_m2_s(args, model))
+    _print_record(record, f'{model.params.name}: {args.speed_rpm:g} rpm, '
+                  f'{args.pressure_bar:g} bar (torques in N*m, signed)', args.json)
+    return 0
+
+
+def _cmd_kinematics(args: argparse.Namespace) -> int:
+    model = _model(args)
+    geom = model.params.geometry
+    res = model.evaluate(rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar),
+                         _viscosity_m2_s(args, model), waveforms=True)
+    wf = res.waveforms
+    record = {
+        'stroke_mm': geom.stroke_m / MM_TO_M,
+        'displacement_cc': geom.displacement_m3 / CC_TO_M3,
+        'head_speed_max_m_s': float(np.abs(wf.head_velocity_m_s[0]).max()),
+        'piston_omega_max_rad_s': float(np.linalg.norm(wf.piston_omega_rad_s[0], axis=-1).max()),
+        'joint_force_max_n': float(res.joint_force_max_n[0]),
+        'head_force_max_n': float(res.head_force_max_n[0]),
+    }
+    _print_record({k: _json_number(v) for k, v in record.items()},
+                  f'{model.params.name}: {args.speed_rpm:g} rpm, {args.pressure_bar:g} bar',
+                  args.json)
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .plots import write_model_figures
+
+    model = _model(args)
+    for path in write_model_figures(model, Path(args.out)):
+        print(path)
+    return 0
+
+
+def _add_pump(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('--pump', metavar='FILE', default=None,
+                        help='pump parameter YAML (default: config/pumps/hong_doh_2004.yaml)')
+
+
+def _add_viscosity(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('--viscosity-cst', type=_viscosity, default=None, metavar='CST',
+                        help='oil kinematic viscosity [cSt] (default: the pump file\'s)')
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the ``pump_friction`` argument parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Parser with one sub-command per job.
+    """
+    parser = _Parser(prog='pump_friction',
+                     description='Bent-axis pump friction model (Hong & Doh 2004).')
+    sub = parser.add_subparsers(dest='command', required=True, parser_class=_Parser)
+
+    p = sub.add_parser('paper-check', help='the paper\'s numbers next to the model\'s')
+    _add_pump(p)
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_paper_check)
+
+    p = sub.add_parser('torque', help='revolution-mean torques at one operating point')
+    p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',
+                   help='shaft speed [rpm], signed')
+    p.add_argument('--pressure-bar', type=_pressure, required=True, metavar='P',
+                   help='pressure difference p_A - p_B [bar], signed')
+    _add_viscosity(p)
+    _add_pump(p)
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_torque)
+
+    p = sub.add_parser('kinematics', help='stroke, displacement, piston speeds and forces')
+    p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',
+                   help='shaft speed [rpm], signed')
+    p.add_argument('--pressure-bar', type=_pressure, default=0.0, metavar='P',
+                   help='pressure difference [bar] for the forces (default 0)')
+    _add_viscosity(p)
+    _add_pump(p)
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_kinematics)
+
+    p = sub.add_parser('plot', help='PNG figures in the manner of the paper\'s')
+    p.add_argument('--out', required=True, metavar='DIR', help='output folder')
+    _add_pump(p)
+    p.set_defaults(func=_cmd_plot)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``pump_friction`` command line.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit code: 0 on success, 2 on a bad argument or input file.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        return args.func(args)
+    except PumpFrictionError as exc:
+        print(f'pump_friction: error: {exc}', file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # e.g. piped into head
+        return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

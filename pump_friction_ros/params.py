@@ -1,0 +1,481 @@
+"""Pump parameter sets: loading, validation and hashing of the YAML files in ``config/pumps``.
+
+Every value is SI. The YAML files say, value by value, where each number comes from
+(Hong & Doh 2004 table, figure or text; or how it was fixed when the paper leaves it open).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import sys
+from dataclasses import asdict, dataclass, field
+from itertools import pairwise
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .errors import ConfigError
+
+__all__ = [
+    'Bearing',
+    'Curve',
+    'Geometry',
+    'Oil',
+    'Operation',
+    'Piston',
+    'PistonFriction',
+    'PumpParams',
+    'ValvePlate',
+    'default_pump_file',
+    'load_pump',
+    'pump_from_mapping',
+]
+
+JOINT_SLIDING_FRAMES = ('barrel', 'flange')
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A piecewise-linear curve y(x), held constant beyond its end points.
+
+    Used for the friction coefficients the paper gives as measured curves (Figs. 6, 7, 9).
+    """
+
+    x: tuple[float, ...]
+    y: tuple[float, ...]
+
+    def __call__(self, x: np.ndarray | float) -> np.ndarray:
+        """Evaluate the curve (linear between points, constant outside).
+
+        Parameters
+        ----------
+        x : float or ndarray
+            Abscissa, in the unit of the curve's ``x`` [-].
+
+        Returns
+        -------
+        ndarray
+            Ordinate [-].
+        """
+        return np.interp(x, self.x, self.y)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Kinematic geometry of the bent-axis pump (Table 1, Fig. 2(a))."""
+
+    n_pistons: int
+    bore_diameter_m: float
+    inclination_rad: float
+    joint_pitch_radius_m: float
+    bore_pitch_radius_m: float
+    rod_length_m: float
+    joint_ball_radius_m: float
+    head_radius_m: float
+
+    @property
+    def piston_area_m2(self) -> float:
+        """Piston head area A_p [m^2]."""
+        return math.pi / 4.0 * self.bore_diameter_m**2
+
+    @property
+    def stroke_m(self) -> float:
+        """Piston stroke of the Fig. 2 geometry, 2 R_S sin(delta) [m].
+
+        Exact for axes that intersect in the drive-flange plane, whatever the rod length
+        and bore pitch radius (the bore-axis position at shaft angles 0 and pi differs by
+        exactly this amount; see ``kinematics.head_position``).
+        """
+        return 2.0 * self.joint_pitch_radius_m * math.sin(self.inclination_rad)
+
+    @property
+    def displacement_m3(self) -> float:
+        """Geometric displacement per revolution V_g = N A_p stroke [m^3]."""
+        return self.n_pistons * self.piston_area_m2 * self.stroke_m
+
+
+@dataclass(frozen=True)
+class Piston:
+    """Mass properties of one piston (axisymmetric rigid body)."""
+
+    mass_kg: float
+    joint_to_cg_m: float
+    inertia_axial_kg_m2: float
+    inertia_transverse_kg_m2: float
+
+
+@dataclass(frozen=True)
+class ValvePlate:
+    """Valve-plate geometry (Fig. 2(b)) and friction data (Figs. 6, 7)."""
+
+    land_inner_radius_m: float
+    port_inner_radius_m: float
+    port_outer_radius_m: float
+    land_outer_radius_m: float
+    film_clearance_m: float
+    coulomb_coefficient: Curve  # x: |shaft speed| [rad/s]
+
+    @property
+    def friction_radius_m(self) -> float:
+        """Friction radius of eq. (9): the mean of R_o and R_i [m]."""
+        return 0.5 * (self.land_outer_radius_m + self.land_inner_radius_m)
+
+    @property
+    def bridge_angle_rad(self) -> float:
+        """Angular width of the land between the two kidney ports [rad].
+
+        Derived from Fig. 2(b): kidneys of radial width r_o - r_i with round ends, and a
+        zero-overlap bridge as wide as the kidney at the port pitch radius (r_o + r_i)/2.
+        """
+        half_width = 0.5 * (self.port_outer_radius_m - self.port_inner_radius_m)
+        pitch = 0.5 * (self.port_outer_radius_m + self.port_inner_radius_m)
+        return 2.0 * math.asin(half_width / pitch)
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """Shaft-bearing coefficients of Palmgren's eq. (10), in its catalogue units."""
+
+    f0: float
+    f1: float
+    a: float
+    b: float
+    mean_diameter_m: float
+
+
+@dataclass(frozen=True)
+class PistonFriction:
+    """Friction of the spherical joints and piston heads (Fig. 9, eqs. 3-5)."""
+
+    joint_coefficient: Curve  # x: sliding speed [m/s]
+    head_coefficient: Curve  # x: sliding speed [m/s]
+    joint_sliding_frame: str
+
+
+@dataclass(frozen=True)
+class Oil:
+    """Hydraulic oil properties."""
+
+    density_kg_m3: float
+    viscosity_m2_s: float
+
+
+@dataclass(frozen=True)
+class Operation:
+    """Operating conventions: charge pressure, zero-speed smoothing, efficiency domain."""
+
+    charge_pressure_pa: float
+    zero_speed_threshold_rad_s: float
+    efficiency_min_speed_rad_s: float
+    efficiency_min_pressure_pa: float
+
+
+@dataclass(frozen=True)
+class PumpParams:
+    """A complete, validated pump parameter set (SI units throughout)."""
+
+    name: str
+    description: str
+    geometry: Geometry
+    piston: Piston
+    valve_plate: ValvePlate
+    bearing: Bearing
+    piston_friction: PistonFriction
+    oil: Oil
+    operation: Operation
+    source: str = field(default='', compare=False)
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the parameter values (not of the file text: comments do not count)."""
+        values = asdict(self)
+        values.pop('source')
+        canonical = json.dumps(values, sort_keys=True, separators=(',', ':'))
+        return hashlib.sha256(canonical.encode()).hexdigest()
+
+
+# ---------------------------------------------------------------------------------------
+# Loading and validation
+# ---------------------------------------------------------------------------------------
+
+
+def _as_number(value: Any) -> float | None:
+    """Return ``value`` as a float, or None if it is not a number.
+
+    PyYAML follows YAML 1.1, where ``5.0e5`` (no exponent sign) is a string; such plain
+    numeric strings are accepted as numbers. Booleans are not numbers.
+    """
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, (int, float)):
+        return float(value)
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return None
+    return None
+
+
+class _Section:
+    """Typed access to one mapping of the YAML file, with errors that name the field."""
+
+    def __init__(self, mapping: Any, path: str, where: str) -> None:
+        if not isinstance(mapping, dict):
+            raise ConfigError(f'{where}: {path or "top level"}: expected a mapping')
+        self._mapping = mapping
+        self._path = path
+        self._where = where
+        self._used: set[str] = set()
+
+    def _name(self, key: str) -> str:
+        return f'{self._path}.{key}' if self._path else key
+
+    def _error(self, key: str, message: str) -> ConfigError:
+        return ConfigError(f'{self._where}: {self._name(key)}: {message}')
+
+    def raw(self, key: str) -> Any:
+        if key not in self._mapping:
+            raise self._error(key, 'missing')
+        self._used.add(key)
+        return self._mapping[key]
+
+    def section(self, key: str) -> _Section:
+        return _Section(self.raw(key), self._name(key), self._where)
+
+    def number(self, key: str, *, low: float | None = None, high: float | None = None,
+               low_inclusive: bool = False) -> float:
+        value = _as_number(self.raw(key))
+        if value is None:
+            raise self._error(key, f'expected a number, got {self._mapping[key]!r}')
+        if not math.isfinite(value):
+            raise self._error(key, f'must be finite, got {value}')
+        if low is not None and (value < low or (value == low and not low_inclusive)):
+            relation = '>=' if low_inclusive else '>'
+            raise self._error(key, f'must be {relation} {low}, got {value}')
+        if high is not None and value > high:
+            raise self._error(key, f'must be <= {high}, got {value}')
+        return value
+
+    def integer(self, key: str, *, low: int) -> int:
+        value = self.raw(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self._error(key, f'expected an integer, got {value!r}')
+        if value < low:
+            raise self._error(key, f'must be >= {low}, got {value}')
+        return value
+
+    def text(self, key: str, choices: tuple[str, ...] | None = None) -> str:
+        value = self.raw(key)
+        if not isinstance(value, str):
+            raise self._error(key, f'expected a string, got {value!r}')
+        if choices is not None and value not in choices:
+            raise self._error(key, f'must be one of {", ".join(choices)}, got {value!r}')
+        return value
+
+    def curve(self, key: str, x_key: str, *, low: float = 0.0, high: float = 1.0) -> Curve:
+        sub = self.section(key)
+        xs = sub.raw(x_key)
+        ys = sub.raw('coefficient')
+        name = self._name(key)
+        for label, seq in (('abscissa', xs), ('coefficient', ys)):
+            if not isinstance(seq, list) or not seq:
+                raise ConfigError(f'{self._where}: {name}: {label} must be a non-empty list')
+            if any(_as_number(v) is None or not math.isfinite(_as_number(v)) for v in seq):
+                raise ConfigError(f'{self._where}: {name}: {label} must hold finite numbers')
+        xs, ys = [_as_number(v) for v in xs], [_as_number(v) for v in ys]
+        if len(xs) != len(ys):
+            raise ConfigError(f'{self._where}: {name}: abscissa and coefficient lengths differ'
+                              f' ({len(xs)} vs {len(ys)})')
+        if any(b <= a for a, b in pairwise(xs)) or xs[0] < 0:
+            raise ConfigError(f'{self._where}: {name}: abscissa must start >= 0 and increase')
+        if any(not low <= v <= high for v in ys):
+            raise ConfigError(f'{self._where}: {name}: coefficients must lie in [{low}, {high}]')
+        sub.finish()
+        return Curve(tuple(float(v) for v in xs), tuple(float(v) for v in ys))
+
+    def finish(self) -> None:
+        unknown = sorted(set(self._mapping) - self._used)
+        if unknown:
+            raise ConfigError(f'{self._where}: {self._path or "top level"}: unknown key(s) '
+                              f'{", ".join(map(str, unknown))}')
+
+
+def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
+    """Build a validated `PumpParams` from the parsed YAML mapping.
+
+    Parameters
+    ----------
+    data : dict
+        Parsed content of a pump parameter file.
+    where : str
+        Name of the source, used in error messages.
+
+    Returns
+    -------
+    PumpParams
+        The validated parameter set.
+
+    Raises
+    ------
+    ConfigError
+        One clear message naming the first missing, mistyped or non-physical field.
+    """
+    top = _Section(data, '', where)
+    name = top.text('name')
+    description = top.text('description')
+
+    g = top.section('geometry')
+    geometry = Geometry(
+        n_pistons=g.integer('n_pistons', low=3),
+        bore_diameter_m=g.number('bore_diameter_m', low=0.0, high=0.5),
+        inclination_rad=g.number('inclination_rad', low=0.0, high=math.radians(60.0)),
+        joint_pitch_radius_m=g.number('joint_pitch_radius_m', low=0.0, high=0.5),
+        bore_pitch_radius_m=g.number('bore_pitch_radius_m', low=0.0, high=0.5),
+        rod_length_m=g.number('rod_length_m', low=0.0, high=1.0),
+        joint_ball_radius_m=g.number('joint_ball_radius_m', low=0.0, high=0.1),
+        head_radius_m=g.number('head_radius_m', low=0.0, high=0.25),
+    )
+    g.finish()
+    offset = 2.0 * geometry.joint_pitch_radius_m
+    if geometry.rod_length_m <= offset:
+        raise ConfigError(f'{where}: geometry.rod_length_m: must exceed 2 x joint_pitch_radius_m'
+                          f' ({offset:g} m) for the piston to stay in its bore')
+
+    p = top.section('piston')
+    piston = Piston(
+        mass_kg=p.number('mass_kg', low=0.0, high=10.0),
+        joint_to_cg_m=p.number('joint_to_cg_m', low=0.0, high=1.0, low_inclusive=True),
+        inertia_axial_kg_m2=p.number('inertia_axial_kg_m2', low=0.0, low_inclusive=True),
+        inertia_transverse_kg_m2=p.number('inertia_transverse_kg_m2', low=0.0,
+                                          low_inclusive=True),
+    )
+    p.finish()
+    if piston.joint_to_cg_m > geometry.rod_length_m:
+        raise ConfigError(f'{where}: piston.joint_to_cg_m: must not exceed geometry.rod_length_m')
+
+    v = top.section('valve_plate')
+    valve_plate = ValvePlate(
+        land_inner_radius_m=v.number('land_inner_radius_m', low=0.0),
+        port_inner_radius_m=v.number('port_inner_radius_m', low=0.0),
+        port_outer_radius_m=v.number('port_outer_radius_m', low=0.0),
+        land_outer_radius_m=v.number('land_outer_radius_m', low=0.0, high=0.5),
+        film_clearance_m=v.number('film_clearance_m', low=0.0, high=1e-3),
+        coulomb_coefficient=v.curve('coulomb_coefficient', 'speed_rad_s'),
+    )
+    v.finish()
+    radii = (valve_plate.land_inner_radius_m, valve_plate.port_inner_radius_m,
+             valve_plate.port_outer_radius_m, valve_plate.land_outer_radius_m)
+    if not all(a < b for a, b in pairwise(radii)):
+        raise ConfigError(f'{where}: valve_plate: radii must satisfy R_i < r_i < r_o < R_o')
+
+    b = top.section('bearing')
+    bearing = Bearing(
+        f0=b.number('f0', low=0.0, high=100.0),
+        f1=b.number('f1', low=0.0, high=1.0, low_inclusive=True),
+        a=b.number('a', low=0.0, high=3.0),
+        b=b.number('b', low=0.0, high=3.0),
+        mean_diameter_m=b.number('mean_diameter_m', low=0.0, high=1.0),
+    )
+    b.finish()
+
+    f = top.section('piston_friction')
+    piston_friction = PistonFriction(
+        joint_coefficient=f.curve('joint_coefficient', 'sliding_speed_m_s'),
+        head_coefficient=f.curve('head_coefficient', 'sliding_speed_m_s'),
+        joint_sliding_frame=f.text('joint_sliding_frame', JOINT_SLIDING_FRAMES),
+    )
+    f.finish()
+
+    o = top.section('oil')
+    oil = Oil(
+        density_kg_m3=o.number('density_kg_m3', low=100.0, high=3000.0),
+        viscosity_m2_s=o.number('viscosity_m2_s', low=0.0, high=1e-2),
+    )
+    o.finish()
+
+    op = top.section('operation')
+    operation = Operation(
+        charge_pressure_pa=op.number('charge_pressure_pa', low=0.0, high=1e7,
+                                     low_inclusive=True),
+        zero_speed_threshold_rad_s=op.number('zero_speed_threshold_rad_s', low=0.0, high=100.0),
+        efficiency_min_speed_rad_s=op.number('efficiency_min_speed_rad_s', low=0.0),
+        efficiency_min_pressure_pa=op.number('efficiency_min_pressure_pa', low=0.0),
+    )
+    op.finish()
+    top.finish()
+    return PumpParams(name=name, description=description, geometry=geometry, piston=piston,
+                      valve_plate=valve_plate, bearing=bearing, piston_friction=piston_friction,
+                      oil=oil, operation=operation, source=where)
+
+
+def load_pump(path: str | Path | None = None) -> PumpParams:
+    """Load and validate a pump parameter file.
+
+    Parameters
+    ----------
+    path : str or Path, optional
+        YAML file. Default: the paper's pump, ``config/pumps/hong_doh_2004.yaml``.
+
+    Returns
+    -------
+    PumpParams
+        The validated parameter set.
+
+    Raises
+    ------
+    ConfigError
+        When the file is missing, is not valid YAML, or any field is invalid.
+    """
+    path = Path(path) if path is not None else default_pump_file()
+    try:
+        text = path.read_text(encoding='utf-8')
+    except FileNotFoundError:
+        raise ConfigError(f'pump file not found: {path}') from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f'cannot read pump file {path}: {exc}') from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, 'problem_mark', None)
+        at = f' (line {mark.line + 1}, column {mark.column + 1})' if mark else ''
+        problem = getattr(exc, 'problem', None) or 'invalid YAML'
+        raise ConfigError(f'{path}: invalid YAML{at}: {problem}') from None
+    return pump_from_mapping(data, str(path))
+
+
+def config_dir() -> Path:
+    """Locate the package's ``config`` folder (source checkout, pip or colcon install).
+
+    Returns
+    -------
+    Path
+        The folder holding ``torque_estimator.yaml`` and ``pumps/``.
+    """
+    here = Path(__file__).resolve().parent
+    candidates = [here.parent / 'config']
+    candidates.append(Path(sys.prefix) / 'share' / 'pump_friction_ros' / 'config')
+    try:  # a colcon / ament install
+        from ament_index_python.packages import get_package_share_directory
+        candidates.append(Path(get_package_share_directory('pump_friction_ros')) / 'config')
+    except Exception:  # ament_index missing, or the package is not in the index
+        pass
+    for candidate in candidates:
+        if (candidate / 'pumps').is_dir():
+            return candidate
+    raise ConfigError('cannot find the pump_friction_ros config folder; pass --pump FILE')
+
+
+def default_pump_file() -> Path:
+    """Path of the default pump parameter file (the paper's pump).
+
+    Returns
+    -------
+    Path
+        ``config/pumps/hong_doh_2004.yaml``.
+    """
+    return config_dir() / 'pumps' / 'hong_doh_2004.yaml'

@@ -1,0 +1,117 @@
+"""Unit conversions between SI (used everywhere inside) and the paper's units (edges only)."""
+
+import math
+
+RPM_TO_RAD_S = 2.0 * math.pi / 60.0
+"""Multiply a speed in rpm by this to get rad/s."""
+
+BAR_TO_PA = 1.0e5
+"""Multiply a pressure in bar by this to get Pa."""
+
+CST_TO_M2_S = 1.0e-6
+"""Multiply a kinematic viscosity in cSt (mm^2/s) by this to get m^2/s."""
+
+MM_TO_M = 1.0e-3
+"""Multiply a length in mm by this to get m."""
+
+CC_TO_M3 = 1.0e-6
+"""Multiply a volume in cm^3 (cc) by this to get m^3."""
+
+NMM_TO_NM = 1.0e-3
+"""Multiply a torque in N*mm by this to get N*m."""
+
+
+def rpm_to_rad_s(speed_rpm):
+    """Convert a shaft speed from rpm to rad/s.
+
+    Parameters
+    ----------
+    speed_rpm : float or ndarray
+        Shaft speed [rpm].
+
+    Returns
+    -------
+    float or ndarray
+        Shaft speed [rad/s].
+    """
+    return speed_rpm * RPM_TO_RAD_S
+
+
+def rad_s_to_rpm(speed_rad_s):
+    """Convert a shaft speed from rad/s to rpm.
+
+    Parameters
+    ----------
+    speed_rad_s : float or ndarray
+        Shaft speed [rad/s].
+
+    Returns
+    -------
+    float or ndarray
+        Shaft speed [rpm].
+    """
+    return speed_rad_s / RPM_TO_RAD_S
+
+
+def bar_to_pa(pressure_bar):
+    """Convert a pressure from bar to Pa.
+
+    Parameters
+    ----------
+    pressure_bar : float or ndarray
+        Pressure [bar].
+
+    Returns
+    -------
+    float or ndarray
+        Pressure [Pa].
+    """
+    return pressure_bar * BAR_TO_PA
+
+
+def pa_to_bar(pressure_pa):
+    """Convert a pressure from Pa to bar.
+
+    Parameters
+    ----------
+    pressure_pa : float or ndarray
+        Pressure [Pa].
+
+    Returns
+    -------
+    float or ndarray
+        Pressure [bar].
+    """
+    return pressure_pa / BAR_TO_PA
+
+
+def cst_to_m2_s(viscosity_cst):
+    """Convert a kinematic viscosity from cSt to m^2/s.
+
+    Parameters
+    ----------
+    viscosity_cst : float or ndarray
+        Kinematic viscosity [cSt].
+
+    Returns
+    -------
+    float or ndarray
+        Kinematic viscosity [m^2/s].
+    """
+    return viscosity_cst * CST_TO_M2_S
+
+
+def m2_s_to_cst(viscosity_m2_s):
+    """Convert a kinematic viscosity from m^2/s to cSt.
+
+    Parameters
+    ----------
+    viscosity_m2_s : float or ndarray
+        Kinematic viscosity [m^2/s].
+
+    Returns
+    -------
+    float or ndarray
+        Kinematic viscosity [cSt].
+    """
+    return viscosity_m2_s / CST_TO_M2_S

@@ -1,0 +1,42 @@
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'pump_friction_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test', 'test.*']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/config/pumps', glob('config/pumps/*.yaml')),
+    ],
+    python_requires='>=3.10',
+    install_requires=[
+        'setuptools',
+        'numpy>=1.24',
+        'scipy>=1.10',
+        'PyYAML>=6.0',
+        'matplotlib>=3.7',
+    ],
+    extras_require={
+        # pytest is bounded below 9: with a ROS 2 Jazzy install sourced, the
+        # launch_testing / launch_ros pytest plugins make pytest 9 fail to start.
+        'test': ['pytest>=7,<9', 'ruff>=0.5'],
+    },
+    zip_safe=True,
+    maintainer='pump_friction_ros developers',
+    maintainer_email='dev@pump-friction-ros.invalid',
+    description='Bent-axis pump friction model, torque table, estimator node and bag replay.',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'pump_friction = pump_friction_ros.cli:main',
+        ],
+    },
+)

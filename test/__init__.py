@@ -1,0 +1,1 @@
+"""Tests of pump_friction_ros."""

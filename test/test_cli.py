@@ -1,0 +1,122 @@
+"""The pump_friction command line: exact JSON keys, unit conversion at the edge, bad input."""
+
+import json
+import math
+import struct
+
+import pytest
+
+from pump_friction_ros.cli import main
+
+TORQUE_KEYS = ['theoretical_nm', 'valve_plate_nm', 'bearing_nm', 'spherical_joints_nm',
+               'piston_heads_nm', 'friction_nm', 'input_nm', 'efficiency']
+KINEMATICS_KEYS = ['stroke_mm', 'displacement_cc', 'head_speed_max_m_s',
+                   'piston_omega_max_rad_s', 'joint_force_max_n', 'head_force_max_n']
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_torque_json_has_exactly_the_documented_keys_and_adds_up(capsys):
+    code, out, _ = run(capsys, 'torque', '--speed-rpm', '4000', '--pressure-bar', '136', '--json')
+    assert code == 0
+    data = json.loads(out)
+    assert list(data) == TORQUE_KEYS
+    v_g = 5 * math.pi / 4 * 9.5e-3**2 * 2 * 10.75e-3 * math.sin(math.radians(40))
+    assert data['theoretical_nm'] == pytest.approx(v_g * 136e5 / (2 * math.pi))
+    parts = sum(data[k] for k in TORQUE_KEYS[1:5])
+    assert data['friction_nm'] == pytest.approx(parts)
+    assert data['input_nm'] == pytest.approx(data['theoretical_nm'] + data['friction_nm'])
+    assert data['efficiency'] == pytest.approx(data['theoretical_nm'] / data['input_nm'])
+
+
+def test_torque_reverse_rotation_has_friction_opposing_speed(capsys):
+    _, out, _ = run(capsys, 'torque', '--speed-rpm', '-3000', '--pressure-bar', '100', '--json')
+    data = json.loads(out)
+    assert data['theoretical_nm'] > 0
+    assert all(data[k] < 0 for k in TORQUE_KEYS[1:6])
+
+
+def test_undefined_efficiency_is_json_null(capsys):
+    _, out, _ = run(capsys, 'torque', '--speed-rpm', '0', '--pressure-bar', '100', '--json')
+    assert json.loads(out)['efficiency'] is None
+    assert 'null' in out
+
+
+def test_kinematics_json_keys_and_closed_form_stroke(capsys):
+    code, out, _ = run(capsys, 'kinematics', '--speed-rpm', '10000', '--pressure-bar', '300',
+                       '--json')
+    assert code == 0
+    data = json.loads(out)
+    assert list(data) == KINEMATICS_KEYS
+    assert data['stroke_mm'] == pytest.approx(2 * 10.75 * math.sin(math.radians(40)))
+    assert data['displacement_cc'] == pytest.approx(
+        5 * math.pi / 4 * 0.95**2 * data['stroke_mm'] / 10)
+    assert data['head_speed_max_m_s'] == pytest.approx(7.0, rel=0.05)
+    assert data['piston_omega_max_rad_s'] == pytest.approx(50.0, rel=0.05)
+    assert data['joint_force_max_n'] == pytest.approx(2150, rel=0.03)
+    assert data['head_force_max_n'] < 160
+
+
+def test_viscosity_flag_is_converted_from_cst(capsys):
+    _, lo, _ = run(capsys, 'torque', '--speed-rpm', '6000', '--pressure-bar', '0', '--json',
+                   '--viscosity-cst', '35')
+    _, hi, _ = run(capsys, 'torque', '--speed-rpm', '6000', '--pressure-bar', '0', '--json',
+                   '--viscosity-cst', '70')
+    lo, hi = json.loads(lo), json.loads(hi)
+    assert hi['valve_plate_nm'] == pytest.approx(2 * lo['valve_plate_nm'])
+
+
+def test_paper_check_prints_the_table_and_exits_zero(capsys):
+    code, out, _ = run(capsys, 'paper-check')
+    assert code == 0
+    assert 'valve plate, 300 bar, 10,000 rpm' in out
+    assert 'statements hold' in out
+    code, out, _ = run(capsys, 'paper-check', '--json')
+    assert code == 0
+    assert len(json.loads(out)) > 20
+
+
+@pytest.mark.parametrize('argv', [
+    ['torque', '--speed-rpm', 'nan', '--pressure-bar', '100'],
+    ['torque', '--speed-rpm', 'inf', '--pressure-bar', '100'],
+    ['torque', '--speed-rpm', 'fast', '--pressure-bar', '100'],
+    ['torque', '--pressure-bar', '100'],
+    ['torque', '--speed-rpm', '1e9', '--pressure-bar', '100'],
+    ['torque', '--speed-rpm', '100', '--pressure-bar', '100', '--viscosity-cst', '-3'],
+    ['kinematics', '--speed-rpm', '100', '--pump', '/no/such/pump.yaml'],
+    ['frobnicate'],
+    [],
+])
+def test_bad_arguments_exit_2_with_one_line_and_no_traceback(capsys, argv):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ''
+    assert len(err.strip().splitlines()) == 1
+    assert err.startswith('pump_friction: error: ')
+    assert 'Traceback' not in err
+
+
+def test_invalid_pump_yaml_exits_2(capsys, tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('name: [unterminated\n')
+    code, _, err = run(capsys, 'torque', '--speed-rpm', '1', '--pressure-bar', '1',
+                       '--pump', str(bad))
+    assert code == 2
+    assert 'invalid YAML' in err
+
+
+def test_plot_writes_labelled_png_figures(capsys, tmp_path):
+    code, _, _ = run(capsys, 'plot', '--out', str(tmp_path / 'figs'))
+    assert code == 0
+    files = sorted((tmp_path / 'figs').glob('*.png'))
+    assert [f.name[:5] for f in files] == ['fig03', 'fig10', 'fig11', 'fig12', 'fig13',
+                                           'fig14', 'fig15', 'fig16', 'fig17', 'fig19']
+    for f in files:
+        head = f.read_bytes()[:24]
+        assert head[:8] == b'\x89PNG\r\n\x1a\n'
+        width, height = struct.unpack('>II', head[16:24])
+        assert width > 400 and height > 300

@@ -1,0 +1,109 @@
+"""Pump parameter files: validation errors name the field; the hash follows values only."""
+
+import copy
+
+import pytest
+import yaml
+
+from pump_friction_ros.errors import ConfigError
+from pump_friction_ros.params import load_pump, pump_from_mapping
+
+from .conftest import CONSISTENT_PUMP, PAPER_PUMP
+
+
+@pytest.fixture
+def raw():
+    return yaml.safe_load(PAPER_PUMP.read_text())
+
+
+def test_both_shipped_parameter_sets_load_and_differ(paper_params, consistent_params):
+    assert paper_params.name == 'hong_doh_2004'
+    assert consistent_params.name == 'hong_doh_2004_consistent'
+    assert paper_params.sha256 != consistent_params.sha256
+    assert paper_params.geometry == consistent_params.geometry
+
+
+def test_default_pump_is_the_papers(paper_params):
+    assert load_pump().sha256 == paper_params.sha256
+
+
+def test_hash_ignores_comments_but_not_values(tmp_path, paper_params):
+    text = PAPER_PUMP.read_text()
+    commented = tmp_path / 'c.yaml'
+    commented.write_text('# another comment\n' + text.replace('# Table 1', '# table one'))
+    assert load_pump(commented).sha256 == paper_params.sha256
+    changed = tmp_path / 'v.yaml'
+    changed.write_text(text.replace('mass_kg: 3.2e-3', 'mass_kg: 3.3e-3'))
+    assert load_pump(changed).sha256 != paper_params.sha256
+
+
+def test_yaml_1_1_exponent_without_sign_is_read_as_a_number(raw):
+    raw['oil']['viscosity_m2_s'] = '46e-6'
+    raw['operation']['efficiency_min_pressure_pa'] = '5e5'
+    params = pump_from_mapping(raw)
+    assert params.oil.viscosity_m2_s == 46e-6
+    assert params.operation.efficiency_min_pressure_pa == 5e5
+
+
+@pytest.mark.parametrize(('section', 'key', 'value', 'message'), [
+    ('geometry', 'rod_length_m', None, 'geometry.rod_length_m: missing'),
+    ('geometry', 'n_pistons', 4.5, 'geometry.n_pistons: expected an integer'),
+    ('geometry', 'bore_diameter_m', 'wide', 'geometry.bore_diameter_m: expected a number'),
+    ('geometry', 'bore_diameter_m', -9.5e-3, 'geometry.bore_diameter_m: must be > 0'),
+    ('geometry', 'rod_length_m', 0.015, 'rod_length_m: must exceed'),
+    ('piston', 'mass_kg', float('nan'), 'piston.mass_kg: must be finite'),
+    ('piston', 'mass_kg', True, 'piston.mass_kg: expected a number'),
+    ('valve_plate', 'port_inner_radius_m', 5e-3, 'R_i < r_i < r_o < R_o'),
+    ('oil', 'viscosity_m2_s', 0.0, 'oil.viscosity_m2_s: must be > 0'),
+    ('piston_friction', 'joint_sliding_frame', 'shaft', 'must be one of barrel, flange'),
+    ('bearing', 'f0', -1, 'bearing.f0: must be > 0'),
+])
+def test_invalid_field_is_refused_with_one_message_naming_it(raw, section, key, value, message):
+    if value is None:
+        del raw[section][key]
+    else:
+        raw[section][key] = value
+    with pytest.raises(ConfigError, match=message.replace('(', r'\(')):
+        pump_from_mapping(raw, 'pump.yaml')
+
+
+def test_unknown_key_is_refused(raw):
+    raw['geometry']['rod_lenght_m'] = 0.05
+    with pytest.raises(ConfigError, match=r'unknown key.*rod_lenght_m'):
+        pump_from_mapping(raw)
+
+
+@pytest.mark.parametrize(('curve', 'mutate', 'message'), [
+    ('joint_coefficient', lambda c: c.update(coefficient=[0.1]), 'lengths differ'),
+    ('joint_coefficient', lambda c: c.update(sliding_speed_m_s=[0, 2, 1, 3, 4, 5]), 'increase'),
+    ('head_coefficient', lambda c: c.update(coefficient=[1.5]), r'\[0.0, 1.0\]'),
+    ('head_coefficient', lambda c: c.update(coefficient=[]), 'non-empty'),
+])
+def test_invalid_friction_curve_is_refused(raw, curve, mutate, message):
+    mutate(raw['piston_friction'][curve])
+    with pytest.raises(ConfigError, match=message):
+        pump_from_mapping(raw)
+
+
+def test_unreadable_files_give_clear_errors(tmp_path):
+    with pytest.raises(ConfigError, match='not found'):
+        load_pump(tmp_path / 'missing.yaml')
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('geometry: [1, 2\n')
+    with pytest.raises(ConfigError, match=r'invalid YAML \(line'):
+        load_pump(bad)
+    scalar = tmp_path / 'scalar.yaml'
+    scalar.write_text('42\n')
+    with pytest.raises(ConfigError, match='expected a mapping'):
+        load_pump(scalar)
+
+
+def test_consistent_set_only_changes_documented_values(raw):
+    other = yaml.safe_load(CONSISTENT_PUMP.read_text())
+    differ = {(s, k) for s in raw if isinstance(raw[s], dict)
+              for k in raw[s] if raw[s][k] != other[s][k]}
+    assert differ == {('piston', 'mass_kg'), ('piston', 'joint_to_cg_m'),
+                      ('piston', 'inertia_axial_kg_m2'), ('piston', 'inertia_transverse_kg_m2'),
+                      ('valve_plate', 'film_clearance_m'), ('bearing', 'mean_diameter_m'),
+                      ('piston_friction', 'joint_sliding_frame')}
+    assert copy.deepcopy(raw) == raw
