@@ -79,7 +79,48 @@ def bench_model() -> None:
           f'{grid / sp.size * 1e6:.0f} us per operating point')
 
 
-SECTIONS: dict[str, Callable[[], None]] = {'model': bench_model}
+def bench_table() -> None:
+    """Friction table: build time; scalar and vectorised lookups against scipy's RGI."""
+    from scipy.interpolate import RegularGridInterpolator
+
+    from .table import build_table
+
+    params = load_pump()
+    start = time.perf_counter()
+    table = build_table(params)
+    build = time.perf_counter() - start
+    shape = 'x'.join(str(n) for n in table.torque_nm.shape)
+    print(f'table ({params.name}): {shape} (mode x speed x pressure x viscosity x component)')
+    print(f'  built in {build:.2f} s (target: a few seconds)')
+    print('  baseline: scipy.interpolate.RegularGridInterpolator (linear) on the same grid and '
+          'values (one mode, 4 components)')
+    rgi = RegularGridInterpolator((table.speed_axis_rad_s, table.pressure_axis_pa,
+                                   table.viscosity_axis_m2_s), table.torque_nm[0])
+    _row('', 'ours', 'RGI', 'speed-up')
+    speed, pressure, viscosity = 523.0, 137e5, 53e-6
+    point = np.array([[speed, pressure, viscosity]])
+    t_rgi = best_time_s(lambda: rgi(point), repeat=5, number=2000)
+    t_mag = best_time_s(lambda: table.magnitudes(speed, pressure, viscosity), repeat=5,
+                        number=20000)
+    t_lookup = best_time_s(lambda: table.lookup(speed, pressure, viscosity), repeat=5,
+                           number=20000)
+    _row('scalar: component torques, per call (target >= 25x)', f'{t_mag * 1e6:.2f} us',
+         f'{t_rgi * 1e6:.1f} us', f'{t_rgi / t_mag:.0f}x')
+    _row('scalar: signed torques + theoretical + efficiency', f'{t_lookup * 1e6:.2f} us',
+         f'{t_rgi * 1e6:.1f} us', f'{t_rgi / t_lookup:.0f}x')
+    rng = np.random.default_rng(0)
+    n = 1_000_000
+    pts = np.column_stack([rng.uniform(0.0, table.speed_axis_rad_s[-1], n),
+                           rng.uniform(0.0, table.pressure_axis_pa[-1], n),
+                           rng.uniform(*table.viscosity_axis_m2_s[[0, -1]], n)])
+    t_rgi_v = best_time_s(lambda: rgi(pts), repeat=2)
+    t_vec = best_time_s(lambda: table.magnitudes_array(pts[:, 0], pts[:, 1], pts[:, 2]),
+                        repeat=3)
+    _row('vector: 1 M points, points per second (target >= 3x)', f'{n / t_vec / 1e6:.2f} M/s',
+         f'{n / t_rgi_v / 1e6:.2f} M/s', f'{t_rgi_v / t_vec:.1f}x')
+
+
+SECTIONS: dict[str, Callable[[], None]] = {'model': bench_model, 'table': bench_table}
 
 
 def main(argv: list[str] | None = None) -> int:

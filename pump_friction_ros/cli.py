@@ -131,12 +131,73 @@ def _print_record(record: dict[str, float | None], header: str, as_json: bool) -
         print(f'  {key:<24} {shown}')
 
 
+def table_record(table, speed_rad_s: float, pressure_pa: float,
+                 viscosity_m2_s: float) -> tuple[dict[str, float | None], int]:
+    """Torques of one operating point from a friction table, keyed as `torque_record`.
+
+    Parameters
+    ----------
+    table : FrictionTable
+        The table.
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    pressure_pa : float
+        Pressure difference [Pa].
+    viscosity_m2_s : float
+        Oil kinematic viscosity [m^2/s].
+
+    Returns
+    -------
+    tuple
+        The record (signed torques [N*m], efficiency [-] or None) and the lookup flags.
+    """
+    res = table.lookup(speed_rad_s, pressure_pa, viscosity_m2_s)
+    record = {'theoretical_nm': res.theoretical_nm}
+    record.update({f'{c}_nm': v for c, v in zip(COMPONENTS, res.components_nm, strict=True)})
+    record.update(friction_nm=res.friction_nm, input_nm=res.input_nm, efficiency=res.efficiency)
+    return {k: _json_number(v) for k, v in record.items()}, res.flags
+
+
 def _cmd_torque(args: argparse.Namespace) -> int:
-    model = _model(args)
-    record = torque_record(model, rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar),
-                           _viscosity_m2_s(args, model))
-    _print_record(record, f'{model.params.name}: {args.speed_rpm:g} rpm, '
-                  f'{args.pressure_bar:g} bar (torques in N*m, signed)', args.json)
+    params = load_pump(args.pump)
+    speed, pressure = rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar)
+    viscosity = (params.oil.viscosity_m2_s if args.viscosity_cst is None
+                 else cst_to_m2_s(args.viscosity_cst))
+    if args.table:
+        from .table import describe_flags, load_table
+
+        record, flags = table_record(load_table(args.table, params), speed, pressure, viscosity)
+        if flags:
+            print(f'pump_friction: warning: {describe_flags(flags)}: clamped to the table\'s '
+                  'edge', file=sys.stderr)
+        source = f'table {args.table}'
+    else:
+        record = torque_record(PumpModel(params), speed, pressure, viscosity)
+        source = 'full model'
+    _print_record(record, f'{params.name}: {args.speed_rpm:g} rpm, {args.pressure_bar:g} bar, '
+                  f'{source} (torques in N*m, signed)', args.json)
+    return 0
+
+
+def _cmd_build_table(args: argparse.Namespace) -> int:
+    from . import MODEL_VERSION
+    from .progress import ProgressBar
+    from .table import TableSpec, build_table, cache_dir
+
+    params = load_pump(args.pump)
+    spec = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
+                     max_pressure_pa=bar_to_pa(args.max_pressure_bar),
+                     min_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[0]),
+                     max_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[1]))
+    out = Path(args.out) if args.out else (
+        cache_dir() / f'{params.name}-{params.sha256[:16]}-m{MODEL_VERSION}.npz')
+    with ProgressBar('building table', enabled=not args.quiet) as bar:
+        table = build_table(params, spec, progress=bar)
+    table.save(out)
+    shape = 'x'.join(str(n) for n in table.torque_nm.shape[:-1])
+    print(f'{out}: {shape} grid (mode x speed x pressure x viscosity), '
+          f'{table.metadata["build_seconds"]:.2f} s, pump {params.name} '
+          f'sha256 {params.sha256[:12]}')
     return 0
 
 
@@ -203,8 +264,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help='pressure difference p_A - p_B [bar], signed')
     _add_viscosity(p)
     _add_pump(p)
+    p.add_argument('--table', metavar='FILE', default=None,
+                   help='answer from this friction table instead of the full model')
     p.add_argument('--json', action='store_true', help='machine-readable output')
     p.set_defaults(func=_cmd_torque)
+
+    p = sub.add_parser('build-table', help='precompute the friction-torque table')
+    _add_pump(p)
+    p.add_argument('--out', metavar='FILE', default=None,
+                   help='output .npz (default: the cache used when no table is given)')
+    p.add_argument('--max-speed-rpm', type=_bounded_float('--max-speed-rpm', 100.0,
+                                                          MAX_SPEED_RPM), default=12000.0,
+                   metavar='N', help='speed envelope [rpm] (default 12000)')
+    p.add_argument('--max-pressure-bar', type=_bounded_float('--max-pressure-bar', 1.0,
+                                                             MAX_PRESSURE_BAR), default=350.0,
+                   metavar='P', help='pressure-difference envelope [bar] (default 350)')
+    p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=[10.0, 100.0],
+                   metavar=('LOW', 'HIGH'), help='viscosity range [cSt] (default 10 100)')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=_cmd_build_table)
 
     p = sub.add_parser('kinematics', help='stroke, displacement, piston speeds and forces')
     p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',

@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from .params import Bearing, Geometry, ValvePlate
-from .units import CST_TO_M2_S, MM_TO_M, NMM_TO_NM, RPM_TO_RAD_S
+from .units import CST_PER_M2_S, MM_TO_M, NMM_TO_NM, RPM_TO_RAD_S
 
 __all__ = [
     'PALMGREN_THRESHOLD_CST_RPM',
@@ -173,7 +173,7 @@ def bearing_torque_nm(load_n: np.ndarray, speed_abs_rad_s: np.ndarray,
     """
     d_m_mm = bearing.mean_diameter_m / MM_TO_M
     mechanical = bearing.f1 * np.power(load_n, bearing.a) * d_m_mm**bearing.b * NMM_TO_NM
-    nu_n = (np.asarray(viscosity_m2_s, dtype=float) / CST_TO_M2_S
+    nu_n = (np.asarray(viscosity_m2_s, dtype=float) * CST_PER_M2_S
             * (np.asarray(speed_abs_rad_s, dtype=float) / RPM_TO_RAD_S))
     fast = 1e-7 * bearing.f0 * np.power(np.maximum(nu_n, 0.0), 2.0 / 3.0) * d_m_mm**3
     slow = 160e-7 * bearing.f0 * d_m_mm**3

@@ -9,7 +9,10 @@ BAR_TO_PA = 1.0e5
 """Multiply a pressure in bar by this to get Pa."""
 
 CST_TO_M2_S = 1.0e-6
-"""Multiply a kinematic viscosity in cSt (mm^2/s) by this to get m^2/s."""
+"""A kinematic viscosity of 1 cSt (1 mm^2/s) in m^2/s."""
+
+CST_PER_M2_S = 1.0e6
+"""Kinematic viscosity of 1 m^2/s in cSt; dividing by it converts cSt to m^2/s exactly."""
 
 MM_TO_M = 1.0e-3
 """Multiply a length in mm by this to get m."""
@@ -98,7 +101,7 @@ def cst_to_m2_s(viscosity_cst):
     float or ndarray
         Kinematic viscosity [m^2/s].
     """
-    return viscosity_cst * CST_TO_M2_S
+    return viscosity_cst / CST_PER_M2_S
 
 
 def m2_s_to_cst(viscosity_m2_s):
@@ -114,4 +117,4 @@ def m2_s_to_cst(viscosity_m2_s):
     float or ndarray
         Kinematic viscosity [cSt].
     """
-    return viscosity_m2_s / CST_TO_M2_S
+    return viscosity_m2_s * CST_PER_M2_S

@@ -3,6 +3,7 @@
 import json
 import math
 import struct
+from pathlib import Path
 
 import pytest
 
@@ -120,3 +121,52 @@ def test_plot_writes_labelled_png_figures(capsys, tmp_path):
         assert head[:8] == b'\x89PNG\r\n\x1a\n'
         width, height = struct.unpack('>II', head[16:24])
         assert width > 400 and height > 300
+
+
+def test_build_table_then_torque_from_table_matches_the_model(capsys, tmp_path):
+    out = tmp_path / 'tab.npz'
+    code, text, _ = run(capsys, 'build-table', '--out', str(out), '--quiet')
+    assert code == 0 and out.exists() and str(out) in text
+    _, model_json, _ = run(capsys, 'torque', '--speed-rpm', '-7000', '--pressure-bar', '-210',
+                           '--json')
+    code, table_json, err = run(capsys, 'torque', '--speed-rpm', '-7000', '--pressure-bar',
+                                '-210', '--json', '--table', str(out))
+    assert code == 0 and err == ''
+    model, table = json.loads(model_json), json.loads(table_json)
+    assert list(table) == TORQUE_KEYS
+    assert table['theoretical_nm'] == model['theoretical_nm']
+    tolerance = max(0.005 * abs(model['friction_nm']), 1e-3)
+    for key in TORQUE_KEYS[1:7]:
+        assert table[key] == pytest.approx(model[key], abs=tolerance)
+
+
+def test_torque_from_table_outside_its_envelope_warns_on_stderr(capsys, tmp_path):
+    out = tmp_path / 'tab.npz'
+    run(capsys, 'build-table', '--out', str(out), '--quiet', '--max-speed-rpm', '3000',
+        '--max-pressure-bar', '100')
+    code, _, err = run(capsys, 'torque', '--speed-rpm', '5000', '--pressure-bar', '50',
+                       '--table', str(out))
+    assert code == 0
+    assert 'warning: speed above the table' in err
+
+
+def test_table_for_another_pump_exits_2_saying_how_to_rebuild(capsys, tmp_path):
+    out = tmp_path / 'tab.npz'
+    run(capsys, 'build-table', '--out', str(out), '--quiet', '--max-speed-rpm', '2000')
+    consistent = str(Path(__file__).parents[1] / 'config/pumps/hong_doh_2004_consistent.yaml')
+    code, _, err = run(capsys, 'torque', '--speed-rpm', '1000', '--pressure-bar', '50',
+                       '--table', str(out), '--pump', consistent)
+    assert code == 2
+    assert 'build-table --pump' in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize('argv', [
+    ['build-table', '--max-speed-rpm', '-5'],
+    ['build-table', '--viscosity-cst', '50'],
+    ['build-table', '--viscosity-cst', '80', '20'],
+    ['torque', '--speed-rpm', '1', '--pressure-bar', '1', '--table', '/no/such/table.npz'],
+])
+def test_bad_table_arguments_exit_2(capsys, argv):
+    code, _, err = run(capsys, *argv)
+    assert code == 2
+    assert err.startswith('pump_friction: error: ') and len(err.strip().splitlines()) == 1
