@@ -22,6 +22,7 @@ setup(
         'scipy>=1.10',
         'PyYAML>=6.0',
         'matplotlib>=3.7',
+        'rosbags>=0.10',
     ],
     extras_require={
         # pytest is bounded below 9: with a ROS 2 Jazzy install sourced, the
@@ -37,6 +38,7 @@ setup(
     entry_points={
         'console_scripts': [
             'pump_friction = pump_friction_ros.cli:main',
+            'torque_estimator = pump_friction_ros.node:main',
         ],
     },
 )

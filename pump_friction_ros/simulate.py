@@ -1,0 +1,196 @@
+"""Synthetic EHA duty cycles: the test streams and the sample bags are made from these.
+
+A positioning duty cycle: moves of random length and speed in both directions (trapezoidal
+speed with cosine-smoothed corners, reversals through zero, dwells), a load pressure that
+follows a gravity-like load plus a damping term (so retracting runs the pump as a motor),
+and the motor torque the drive would measure: theoretical + friction (components from a
+friction table, the valve plate scaled by a wear factor) + rotor inertia x true
+acceleration + drive loss, plus white noise on every signal.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .table import FrictionTable
+
+__all__ = ['DutyCycle', 'SimulatedRun', 'simulate_duty_cycle', 'wear_step']
+
+
+@dataclass(frozen=True)
+class DutyCycle:
+    """Settings of a synthetic EHA duty cycle (SI)."""
+
+    duration_s: float = 60.0
+    rate_hz: float = 1000.0  # shaft speed, measured torque
+    pressure_rate_hz: float = 500.0
+    max_speed_rad_s: float = 900.0  # ~8,600 rpm
+    min_speed_rad_s: float = 150.0
+    accel_time_s: tuple[float, float] = (0.05, 0.15)
+    cruise_time_s: tuple[float, float] = (0.3, 1.5)
+    dwell_time_s: tuple[float, float] = (0.05, 0.6)
+    load_pressure_pa: tuple[float, float] = (40e5, 220e5)  # gravity load, slowly varying
+    load_period_s: float = 23.0
+    damping_pa_per_rad_s: float = 2.0e3  # adds to dp with the speed
+    rotor_inertia_kg_m2: float = 2.0e-4
+    drive_loss_torque_nm: float = 0.05
+    viscosity_m2_s: float = 46e-6
+    speed_noise_rad_s: float = 0.5
+    pressure_noise_pa: float = 1.0e5
+    torque_noise_nm: float = 0.05
+
+
+@dataclass(frozen=True)
+class SimulatedRun:
+    """Signals of a simulated run, each with its own time base [s]."""
+
+    t_s: np.ndarray  # speed / torque samples
+    speed_rad_s: np.ndarray  # measured (noisy)
+    true_speed_rad_s: np.ndarray
+    true_accel_rad_s2: np.ndarray
+    torque_nm: np.ndarray  # measured motor torque (noisy)
+    wear_scale: np.ndarray  # valve-plate friction factor in force at t_s
+    pressure_t_s: np.ndarray
+    pressure_diff_pa: np.ndarray  # measured (noisy)
+
+
+def wear_step(start_s: float, scale: float, ramp_s: float = 0.0
+              ) -> Callable[[np.ndarray], np.ndarray]:
+    """Valve-plate friction factor: 1 before ``start_s``, ``scale`` after (optional ramp).
+
+    Parameters
+    ----------
+    start_s : float
+        Time the wear starts [s].
+    scale : float
+        Friction factor reached [-].
+    ramp_s : float
+        Duration of a linear ramp to it [s] (0: a step).
+
+    Returns
+    -------
+    callable
+        Factor as a function of time [-].
+    """
+    def factor(t: np.ndarray) -> np.ndarray:
+        if ramp_s <= 0.0:
+            return np.where(t >= start_s, scale, 1.0)
+        return 1.0 + (scale - 1.0) * np.clip((t - start_s) / ramp_s, 0.0, 1.0)
+
+    return factor
+
+
+def _speed_profile(cycle: DutyCycle, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Trapezoidal moves with cosine-smoothed ramps, alternating mostly, with dwells."""
+    knots_t, knots_v = [0.0], [0.0]
+    now, direction = 0.0, 1.0
+    while now < cycle.duration_s + 2.0:
+        if rng.random() < 0.75:
+            direction = -direction
+        speed = direction * rng.uniform(cycle.min_speed_rad_s, cycle.max_speed_rad_s)
+        ramp = rng.uniform(*cycle.accel_time_s)
+        cruise = rng.uniform(*cycle.cruise_time_s)
+        dwell = rng.uniform(*cycle.dwell_time_s)
+        for dt, v in ((ramp, speed), (cruise, speed), (ramp, 0.0), (dwell, 0.0)):
+            now += dt
+            knots_t.append(now)
+            knots_v.append(v)
+    knots_t, knots_v = np.array(knots_t), np.array(knots_v)
+    seg = np.clip(np.searchsorted(knots_t, t, side='right') - 1, 0, knots_t.size - 2)
+    frac = (t - knots_t[seg]) / (knots_t[seg + 1] - knots_t[seg])
+    smooth = 0.5 - 0.5 * np.cos(np.pi * frac)  # zero slope at both ends of each segment
+    return knots_v[seg] + (knots_v[seg + 1] - knots_v[seg]) * smooth
+
+
+def simulate_duty_cycle(table: FrictionTable, cycle: DutyCycle | None = None, seed: int = 0,
+                        wear: Callable[[np.ndarray], np.ndarray] | None = None
+                        ) -> SimulatedRun:
+    """Simulate a duty cycle; the friction comes from ``table`` (vectorised lookup).
+
+    Parameters
+    ----------
+    table : FrictionTable
+        Friction table of the simulated pump.
+    cycle : DutyCycle, optional
+        Settings (default `DutyCycle()`).
+    seed : int
+        Random seed (the run is reproducible).
+    wear : callable, optional
+        Valve-plate friction factor as a function of time (e.g. `wear_step`).
+
+    Returns
+    -------
+    SimulatedRun
+        The signals.
+    """
+    cycle = cycle or DutyCycle()
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, cycle.duration_s, 1.0 / cycle.rate_hz)
+    speed = _speed_profile(cycle, t, rng)
+    accel = np.gradient(speed, t)
+    lo, hi = cycle.load_pressure_pa
+    phase = rng.uniform(0.0, 2.0 * math.pi)
+
+    def load(time: np.ndarray, spd: np.ndarray) -> np.ndarray:
+        static = lo + (hi - lo) * 0.5 * (1.0 + np.sin(2.0 * math.pi * time / cycle.load_period_s
+                                                      + phase))
+        return static + cycle.damping_pa_per_rad_s * spd
+
+    dp = load(t, speed)
+    res = table.lookup_array(speed, dp, cycle.viscosity_m2_s)
+    scale = np.ones_like(t) if wear is None else np.asarray(wear(t), dtype=float)
+    direction = np.tanh(speed / table.zero_speed_threshold_rad_s)
+    torque = (res['input_nm'] + (scale - 1.0) * res['valve_plate_nm']
+              + cycle.rotor_inertia_kg_m2 * accel
+              + cycle.drive_loss_torque_nm * direction)
+    tp = np.arange(0.0, cycle.duration_s, 1.0 / cycle.pressure_rate_hz)
+    dp_meas = load(tp, np.interp(tp, t, speed))
+    return SimulatedRun(
+        t_s=t,
+        speed_rad_s=speed + rng.normal(0.0, cycle.speed_noise_rad_s, t.size),
+        true_speed_rad_s=speed, true_accel_rad_s2=accel,
+        torque_nm=torque + rng.normal(0.0, cycle.torque_noise_nm, t.size),
+        wear_scale=scale, pressure_t_s=tp,
+        pressure_diff_pa=dp_meas + rng.normal(0.0, cycle.pressure_noise_pa, tp.size))
+
+
+def feed(estimator, run: SimulatedRun) -> list:
+    """Feed a simulated run to a `TorqueEstimator` in time order, as a node would see it.
+
+    Pressure samples come before joint states of the same stamp; each joint state carries
+    speed and torque.
+
+    Parameters
+    ----------
+    estimator : TorqueEstimator
+        The core to drive.
+    run : SimulatedRun
+        The signals.
+
+    Returns
+    -------
+    list of Estimate
+        Every estimate made, in order.
+    """
+    t_joint = np.round(run.t_s * 1e9).astype(np.int64)
+    t_press = np.round(run.pressure_t_s * 1e9).astype(np.int64)
+    stamps = np.concatenate([t_press, t_joint])
+    order = np.argsort(stamps, kind='stable').tolist()
+    n_press = t_press.size
+    stamps = stamps.tolist()
+    press = run.pressure_diff_pa.tolist()
+    speed, torque = run.speed_rad_s.tolist(), run.torque_nm.tolist()
+    out = []
+    for k in order:
+        if k < n_press:
+            estimator.on_pressure(stamps[k], press[k])
+        else:
+            i = k - n_press
+            est = estimator.on_joint_state(stamps[k], speed[i], torque[i])
+            if est is not None:
+                out.append(est)
+    return out

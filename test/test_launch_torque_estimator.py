@@ -1,0 +1,77 @@
+"""launch_testing: the node starts from its parameters file, answers, and shuts down cleanly.
+
+Needs a sourced ROS 2 Jazzy (launch_testing, rclpy); skipped with the reason otherwise.
+"""
+
+import os
+import sys
+import time
+import unittest
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip('launch_testing',
+                    reason='launch_testing is not importable: source ROS 2 Jazzy')
+rclpy = pytest.importorskip('rclpy', reason='rclpy is not importable: source ROS 2 Jazzy')
+
+import launch_testing  # noqa: E402
+import launch_testing.actions  # noqa: E402
+import launch_testing.asserts  # noqa: E402
+from builtin_interfaces.msg import Time  # noqa: E402
+from sensor_msgs.msg import FluidPressure, JointState  # noqa: E402
+from std_msgs.msg import Float64, Header  # noqa: E402
+
+import launch  # noqa: E402
+
+PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml'
+
+
+@pytest.mark.launch_test
+def generate_test_description():
+    env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='1', PYTHONUNBUFFERED='1')
+    node = launch.actions.ExecuteProcess(
+        cmd=[sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
+             str(PARAMS)],
+        env=env, output='screen')
+    return launch.LaunchDescription([node, launch_testing.actions.ReadyToTest()]), {
+        'estimator': node}
+
+
+class TestTorqueEstimatorRuns(unittest.TestCase):
+
+    def test_starts_with_the_papers_pump(self, proc_output, estimator):
+        proc_output.assertWaitFor('pump hong_doh_2004', process=estimator, timeout=60)
+
+    def test_answers_joint_states_with_an_expected_torque(self, proc_output, estimator):
+        proc_output.assertWaitFor('pump hong_doh_2004', process=estimator, timeout=60)
+        rclpy.init()
+        node = rclpy.create_node('launch_probe')
+        got = []
+        try:
+            node.create_subscription(Float64, '/torque_estimator/expected_torque',
+                                     lambda m: got.append(m.data), 10)
+            joint = node.create_publisher(JointState, 'joint_states', 10)
+            pressure = node.create_publisher(FluidPressure, 'load_pressure', 10)
+            end = time.monotonic() + 20.0
+            k = 0
+            while not got and time.monotonic() < end:
+                header = Header(stamp=Time(sec=100, nanosec=k * 1_000_000), frame_id='')
+                pressure.publish(FluidPressure(header=header, fluid_pressure=100e5,
+                                               variance=0.0))
+                joint.publish(JointState(header=header, name=['pump_shaft'], position=[0.0],
+                                         velocity=[300.0], effort=[9.0]))
+                k += 1
+                rclpy.spin_once(node, timeout_sec=0.05)
+            self.assertTrue(got, 'no expected_torque received')
+            self.assertGreater(got[0], 7.0)  # 100 bar: 7.8 N m theoretical + friction
+        finally:
+            node.destroy_node()
+            rclpy.shutdown()
+
+
+@launch_testing.post_shutdown_test()
+class TestShutdown(unittest.TestCase):
+
+    def test_exit_code_is_clean(self, proc_info):
+        launch_testing.asserts.assertExitCodes(proc_info)

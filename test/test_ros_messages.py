@@ -1,0 +1,136 @@
+"""Message conversion at the node's edge, against rosbags' Jazzy message classes."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from rosbags.typesys import Stores, get_typestore
+
+from pump_friction_ros.config import EstimatorConfig
+from pump_friction_ros.estimator import TorqueEstimator
+from pump_friction_ros.ros_messages import (
+    diagnostic_array,
+    float64_message,
+    joint_sample,
+    level_from_msg,
+    level_to_msg,
+    outputs_of,
+    rosbags_types,
+    stamp_msg,
+    stamp_to_ns,
+)
+from pump_friction_ros.table import build_table
+
+STORE = get_typestore(Stores.ROS2_JAZZY)
+T = STORE.types
+
+
+def roundtrip(msg, msgtype):
+    return STORE.deserialize_cdr(STORE.serialize_cdr(msg, msgtype), msgtype)
+
+
+def joint_state(names, velocity, effort, sec=5, nanosec=250):
+    header = T['std_msgs/msg/Header'](stamp=T['builtin_interfaces/msg/Time'](sec=sec,
+                                                                              nanosec=nanosec),
+                                      frame_id='')
+    return T['sensor_msgs/msg/JointState'](
+        header=header, name=names, position=np.zeros(len(names)),
+        velocity=np.array(velocity, dtype=np.float64), effort=np.array(effort, dtype=np.float64))
+
+
+def test_joint_found_by_name_among_several_after_a_cdr_round_trip():
+    msg = roundtrip(joint_state(['wheel', 'pump_shaft'], [1.0, 523.5], [0.2, 12.25]),
+                    'sensor_msgs/msg/JointState')
+    assert joint_sample(msg, 'pump_shaft') == (523.5, 12.25)
+    assert joint_sample(msg, 'wheel') == (1.0, 0.2)
+    assert stamp_to_ns(msg.header.stamp) == 5_000_000_250
+
+
+def test_unfilled_arrays_and_missing_joint():
+    msg = joint_state(['pump_shaft'], [300.0], [])
+    assert joint_sample(msg, 'pump_shaft') == (300.0, None)
+    msg = joint_state(['pump_shaft'], [], [4.0])
+    assert joint_sample(msg, 'pump_shaft') == (None, 4.0)
+    assert joint_sample(msg, 'other') is None
+
+
+def test_rclpy_style_array_fields_work_too():
+    import array
+    msg = SimpleNamespace(name=['pump_shaft'], velocity=array.array('d', [7.5]),
+                          effort=array.array('d'))
+    assert joint_sample(msg, 'pump_shaft') == (7.5, None)
+
+
+def test_zero_stamp_means_unset():
+    assert stamp_to_ns(T['builtin_interfaces/msg/Time'](sec=0, nanosec=0)) is None
+
+
+def test_fluid_pressure_and_temperature_fields_round_trip():
+    header = T['std_msgs/msg/Header'](stamp=T['builtin_interfaces/msg/Time'](sec=1, nanosec=2),
+                                      frame_id='')
+    p = roundtrip(T['sensor_msgs/msg/FluidPressure'](header=header, fluid_pressure=1.36e7,
+                                                     variance=0.0),
+                  'sensor_msgs/msg/FluidPressure')
+    assert p.fluid_pressure == 1.36e7
+    t = roundtrip(T['sensor_msgs/msg/Temperature'](header=header, temperature=48.5,
+                                                   variance=0.0), 'sensor_msgs/msg/Temperature')
+    assert t.temperature == 48.5
+
+
+def test_levels_convert_for_rosbags_ints_and_rclpy_bytes():
+    rosbags_status = T['diagnostic_msgs/msg/DiagnosticStatus']
+    rclpy_like = SimpleNamespace(OK=b'\x00', WARN=b'\x01', ERROR=b'\x02', STALE=b'\x03')
+    for level in range(4):
+        assert level_to_msg(level, rosbags_status) == level
+        assert level_to_msg(level, rclpy_like) == bytes([level])
+        assert level_from_msg(level_to_msg(level, rclpy_like)) == level
+        assert level_from_msg(level_to_msg(level, rosbags_status)) == level
+    assert level_to_msg(1, rclpy_like) == rclpy_like.WARN
+    assert level_to_msg(2, rosbags_status) == rosbags_status.ERROR
+    with pytest.raises(ValueError, match=r'0\.\.3'):
+        level_to_msg(4, rosbags_status)
+
+
+@pytest.fixture(scope='module')
+def estimator(paper_params):
+    est = TorqueEstimator(EstimatorConfig(oil_viscosity_m2_s=46e-6), build_table(paper_params),
+                          46e-6, 'hong_doh_2004')
+    est.on_pressure(0, 120e5)
+    est.on_torque(0, 11.0)
+    est.on_speed(1_000, 500.0)
+    return est
+
+
+def test_diagnostic_array_serialises_with_units_in_keys(estimator):
+    types = rosbags_types(STORE)
+    msg = diagnostic_array(types, estimator.diagnostics(2_000_000), 2_000_000_123,
+                           'torque_estimator: hong_doh_2004', 'eha_pump')
+    back = roundtrip(msg, 'diagnostic_msgs/msg/DiagnosticArray')
+    status = back.status[0]
+    assert status.level == 0 and status.hardware_id == 'eha_pump'
+    assert status.name == 'torque_estimator: hong_doh_2004'
+    values = {kv.key: kv.value for kv in status.values}
+    assert float(values['level']) == 0
+    assert float(values['residual_nm']) == pytest.approx(estimator.last.residual_nm)
+    assert back.header.stamp.sec == 2 and back.header.stamp.nanosec == 123
+
+
+def test_outputs_skip_undefined_values(estimator):
+    est = estimator.last
+    topics = dict(outputs_of(est))
+    assert topics['expected_torque'] == est.expected_nm
+    assert topics['residual'] == est.residual_nm
+    assert 'efficiency' in topics
+    stale_torque = type(est)(**{**est.__dict__, 'residual_nm': math.nan,
+                                'efficiency': math.nan})
+    assert set(dict(outputs_of(stale_torque))) == {'expected_torque', 'friction_torque',
+                                                    'valve_plate_friction_scale'}
+
+
+def test_float64_and_stamp_builders_round_trip():
+    types = rosbags_types(STORE)
+    msg = roundtrip(float64_message(types, 2.5), 'std_msgs/msg/Float64')
+    assert msg.data == 2.5
+    stamp = stamp_msg(types, 3_000_000_007)
+    assert (stamp.sec, stamp.nanosec) == (3, 7)
