@@ -27,7 +27,8 @@ setup(
     extras_require={
         # pytest is bounded below 9: with a ROS 2 Jazzy install sourced, the
         # launch_testing / launch_ros pytest plugins make pytest 9 fail to start.
-        'test': ['pytest>=7,<9', 'ruff>=0.5'],
+        'test': ['pytest>=7,<9', 'ruff>=0.5', 'dask[distributed]>=2024.1'],
+        'fleet': ['dask[distributed]>=2024.1'],
     },
     zip_safe=True,
     maintainer='pump_friction_ros developers',

@@ -164,8 +164,57 @@ def bench_estimator() -> None:
           '(rclpy itself: ~45 % per 1 kHz JointState subscription on Jazzy)')
 
 
+def bench_replay() -> None:
+    """Replay of the wear sample bag against rosbags' own read-and-deserialise loop."""
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from rosbags.highlevel import AnyReader
+
+    from .config import load_estimator_config
+    from .estimator import estimator_from_config
+    from .params import config_dir
+    from .replay import replay_bag
+
+    bag = config_dir().parent / 'bags' / 'eha_valve_plate_wear'
+    if not bag.exists():
+        print(f'replay: sample bag not found at {bag}; skipped')
+        return
+    config = load_estimator_config(config_dir() / 'torque_estimator.yaml')
+    estimator_from_config(config)  # warm the table cache outside the timings
+
+    def rosbags_loop() -> None:
+        with AnyReader([bag]) as reader:
+            for conn, _, raw in reader.messages():
+                reader.deserialize(raw, conn.msgtype)
+
+    tmp = Path(tempfile.mkdtemp(prefix='pump_friction_bench_'))
+
+    def replay(out: bool) -> None:
+        shutil.rmtree(tmp / 'out', ignore_errors=True)
+        replay_bag(bag, config, out_bag=tmp / 'out' if out else None,
+                   core=estimator_from_config(config))
+
+    try:
+        base = best_time_s(rosbags_loop, repeat=3)
+        bare = best_time_s(lambda: replay(False), repeat=3)
+        full = best_time_s(lambda: replay(True), repeat=3)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    with AnyReader([bag]) as reader:
+        count = reader.message_count
+    print(f'replay of {bag.name} ({count} messages, mcap)')
+    print('  baseline: rosbags AnyReader reading and deserialising every message')
+    _row('', 'replay', 'rosbags loop', 'speed-up')
+    _row('estimates only (target >= 1x, aim 2x)', f'{bare:.2f} s', f'{base:.2f} s',
+         f'{base / bare:.2f}x')
+    _row('estimates + output bag', f'{full:.2f} s', f'{base:.2f} s', f'{base / full:.2f}x')
+
+
 SECTIONS: dict[str, Callable[[], None]] = {'model': bench_model, 'table': bench_table,
-                                           'estimator': bench_estimator}
+                                           'estimator': bench_estimator,
+                                           'replay': bench_replay}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -230,6 +231,56 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_replay(args: argparse.Namespace) -> int:
+    from .bags import parse_remaps
+    from .config import load_estimator_config
+    from .params import config_dir
+    from .replay import ReplayJob, discover_bags, fleet_table, run_jobs
+
+    config = load_estimator_config(args.params or config_dir() / 'torque_estimator.yaml')
+    remaps = tuple(parse_remaps(args.topic_remap).items())
+    bags = discover_bags(args.bags)
+    single = len(bags) == 1
+    if args.workers < 1:
+        raise UsageError('--workers must be >= 1')
+
+    def target(base: str | None, bag: Path, suffix: str) -> str | None:
+        if base is None:
+            return None
+        return base if single else str(Path(base) / f'{bag.name}{suffix}')
+
+    jobs = [ReplayJob(bag=str(bag), config=config, out_bag=target(args.out, bag, ''),
+                      csv_path=target(args.csv, bag, '.csv'),
+                      plots_dir=target(args.plots, bag, ''), remaps=remaps,
+                      storage=args.storage, force=args.force,
+                      progress=single and not args.quiet and not args.dask)
+            for bag in bags]
+    summaries = run_jobs(jobs, workers=args.workers, dask_address=args.dask)
+    if single:
+        summary = summaries[0]
+        if summary.error:
+            raise PumpFrictionError(summary.error)
+        print(summary.format())
+        return 0
+    for summary in summaries:
+        print(summary.format().splitlines()[0] if summary.error else
+              f'{summary.bag}: {summary.duration_s:.1f} s, {summary.estimates} estimates, '
+              f'alarm {summary.alarm_s:.1f} s, max valve-plate scale '
+              f'{summary.max_valve_plate_scale:.3f}')
+    print()
+    print(fleet_table(summaries))
+    return 2 if any(s.error for s in summaries) else 0
+
+
+def _cmd_make_sample_bags(args: argparse.Namespace) -> int:
+    from .samples import make_sample_bags
+
+    for path in make_sample_bags(args.out, seed=args.seed, pump_file=args.pump,
+                                 duration_s=args.duration_s):
+        print(path)
+    return 0
+
+
 def _add_pump(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--pump', metavar='FILE', default=None,
                         help='pump parameter YAML (default: config/pumps/hong_doh_2004.yaml)')
@@ -293,6 +344,37 @@ def build_parser() -> argparse.ArgumentParser:
     _add_pump(p)
     p.add_argument('--json', action='store_true', help='machine-readable output')
     p.set_defaults(func=_cmd_kinematics)
+
+    p = sub.add_parser('replay', help='the node\'s outputs from rosbag2 bags')
+    p.add_argument('bags', nargs='+', metavar='BAG',
+                   help='bag directories (sqlite3 or mcap), or folders holding bags')
+    p.add_argument('--params', metavar='FILE', default=None,
+                   help='node parameters file (default: the package\'s '
+                   'config/torque_estimator.yaml, as the launch file uses)')
+    p.add_argument('--out', metavar='OUT_BAG', default=None,
+                   help='output bag (several bags: a folder, one bag each)')
+    p.add_argument('--csv', metavar='FILE', default=None,
+                   help='CSV, one row per estimate (several bags: a folder)')
+    p.add_argument('--plots', metavar='DIR', default=None, help='folder for PNG plots')
+    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW',
+                   help='the node\'s topic OLD is NEW in the bag')
+    p.add_argument('--storage', choices=('sqlite3', 'mcap'), default=None,
+                   help='output bag storage (default: the input\'s)')
+    p.add_argument('--force', action='store_true', help='replace existing outputs')
+    p.add_argument('--workers', type=int, default=os.cpu_count() or 1, metavar='N',
+                   help='parallel local processes for several bags (default: CPU count)')
+    p.add_argument('--dask', metavar='ADDRESS', default=None,
+                   help='run the bags on this Dask scheduler (extra [fleet])')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=_cmd_replay)
+
+    p = sub.add_parser('make-sample-bags', help='write the simulated sample bags')
+    p.add_argument('--out', required=True, metavar='DIR', help='output folder')
+    p.add_argument('--seed', type=int, default=0, metavar='N', help='random seed (default 0)')
+    p.add_argument('--duration-s', type=_bounded_float('--duration-s', 1.0, 86400.0),
+                   default=75.0, metavar='S', help='length of each bag [s] (default 75)')
+    _add_pump(p)
+    p.set_defaults(func=_cmd_make_sample_bags)
 
     p = sub.add_parser('plot', help='PNG figures in the manner of the paper\'s')
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')

@@ -213,7 +213,8 @@ def config_from_mapping(values: dict[str, Any], where: str = '') -> EstimatorCon
 def load_estimator_config(path: str | Path | None) -> EstimatorConfig:
     """Read a ROS 2 parameters file (``torque_estimator: ros__parameters: {...}``).
 
-    ``/**`` (any node) is accepted as well as the node's name.
+    Sections ``/**`` (any node), ``torque_estimator``, ``/torque_estimator`` and
+    ``/**/torque_estimator`` (the node in any namespace) are merged in that order.
 
     Parameters
     ----------
@@ -246,7 +247,8 @@ def load_estimator_config(path: str | Path | None) -> EstimatorConfig:
     if not isinstance(data, dict):
         raise ConfigError(f'{path}: expected "{NODE_NAME}: ros__parameters: ..."')
     merged: dict[str, Any] = {}
-    for node in ('/**', NODE_NAME, f'/{NODE_NAME}'):
+    keys = ('/**', NODE_NAME, f'/{NODE_NAME}', f'/**/{NODE_NAME}')
+    for node in keys:
         section = data.get(node)
         if section is None:
             continue
@@ -254,6 +256,6 @@ def load_estimator_config(path: str | Path | None) -> EstimatorConfig:
                                                            dict):
             raise ConfigError(f'{path}: {node}: expected a ros__parameters mapping')
         merged.update(section['ros__parameters'])
-    if not merged and not any(k in data for k in ('/**', NODE_NAME, f'/{NODE_NAME}')):
+    if not merged and not any(k in data for k in keys):
         raise ConfigError(f'{path}: no "{NODE_NAME}" or "/**" section')
     return config_from_mapping(merged, f'{path}: ')

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from .config import EstimatorConfig
 from .model import COMPONENTS
@@ -53,9 +54,11 @@ class _Input:
     value: float = math.nan
 
 
-@dataclass(frozen=True)
-class Estimate:
-    """One estimate (what the node publishes), SI units; NaN where not available."""
+class Estimate(NamedTuple):
+    """One estimate (what the node publishes), SI units; NaN where not available.
+
+    A NamedTuple: made a thousand times a second, it must be cheap to build.
+    """
 
     stamp_ns: int
     speed_rad_s: float
@@ -113,6 +116,17 @@ class TorqueEstimator:
         self._max_temp_age_ns = round(config.max_temperature_age_s * 1e9)
         self._ports = config.pressure_source == 'ports'
         self._use_temperature = config.viscosity_source == 'temperature'
+        # constants of the per-sample path, read once
+        self._inertia = config.rotor_inertia_kg_m2
+        self._drive_loss = config.drive_loss_torque_nm
+        self._monitor_min_speed = config.monitor_min_speed_rad_s
+        self._monitor_max_accel = config.monitor_max_accel_rad_s2
+        self._monitor_max_dt = config.max_input_age_s
+        self._decimation = config.output_decimation
+        self._torque_per_pa = table.displacement_m3 / (2.0 * math.pi)
+        self._inv_zero_speed = 1.0 / table.zero_speed_threshold_rad_s
+        self._eff_min_speed = table.efficiency_min_speed_rad_s
+        self._eff_min_pressure = table.efficiency_min_pressure_pa
         self.monitor = WearMonitor(MonitorConfig(
             ewma_time_constant_s=config.ewma_time_constant_s,
             cusum_drift_nm=config.cusum_drift_nm, cusum_warn_nm_s=config.cusum_warn_nm_s,
@@ -132,6 +146,8 @@ class TorqueEstimator:
         self._torque = _Input('torque')
         self._temperature = _Input('temperature')
         self._lp1 = self._lp2 = self._speed_prev = 0.0  # speed filter state
+        self._filter_step_ns = -1
+        self._filter_coefficients = (0.0, 0.0, 0.0)
         self._accel = 0.0
         self._monitor_stamp_ns: int | None = None
         self.last: Estimate | None = None
@@ -222,10 +238,16 @@ class TorqueEstimator:
         if not self._accept(self._speed, stamp_ns, speed_rad_s, MAX_SPEED_RAD_S):
             return None
         self._filter_speed(stamp_ns, previous, speed_rad_s)
-        dp = self._pressure_at(stamp_ns)
+        p = self._pressure
+        if not self._ports and p.stamp_ns is not None and \
+                -self._max_age_ns <= stamp_ns - p.stamp_ns <= self._max_age_ns:
+            dp = p.value  # the common case, inline
+        else:
+            dp = self._pressure_at(stamp_ns)
         if dp is None:
             return self._stale(f'no fresh {"port pressures" if self._ports else "pressure"}')
-        viscosity = self._viscosity_at(stamp_ns)
+        viscosity = self._viscosity_at(stamp_ns) if self._use_temperature \
+            else self._viscosity_m2_s
         if viscosity is None:
             return self._stale('no fresh oil temperature')
         return self._estimate(stamp_ns, speed_rad_s, dp, viscosity)
@@ -244,11 +266,15 @@ class TorqueEstimator:
             self._lp1 = self._lp2 = self._speed_prev = speed  # (re)start: no derivative
             self._accel = 0.0  # across a gap
             return
-        dt = (stamp_ns - previous_ns) * 1e-9
+        step_ns = stamp_ns - previous_ns
+        if step_ns != self._filter_step_ns:  # evenly spaced samples: coefficients once
+            dt = step_ns * 1e-9
+            tau = self.config.accel_filter_time_constant_s
+            b = math.exp(-dt / tau)
+            self._filter_coefficients = (b, 1.0 - b, 1.0 - tau * (1.0 - b) / dt)
+            self._filter_step_ns = step_ns
+        b, a, c = self._filter_coefficients
         tau = self.config.accel_filter_time_constant_s
-        b = math.exp(-dt / tau)
-        a = 1.0 - b
-        c = 1.0 - tau * a / dt
         lp1_old = self._lp1
         self._lp1 = b * lp1_old + a * self._speed_prev + c * (speed - self._speed_prev)
         self._lp2 = b * self._lp2 + a * lp1_old + c * (self._lp1 - lp1_old)
@@ -281,54 +307,44 @@ class TorqueEstimator:
         return None
 
     def _estimate(self, stamp_ns: int, speed: float, dp: float, viscosity: float) -> Estimate:
-        cfg = self.config
-        table = self.table
         counts = self.counts
-        mags, flags = table.magnitudes(abs(speed), abs(dp), viscosity, speed * dp < 0.0)
+        mags, flags = self.table.magnitudes(abs(speed), abs(dp), viscosity, speed * dp < 0.0)
         if flags:
             counts['clamped_to_table'] += 1
-        direction = math.tanh(speed / table.zero_speed_threshold_rad_s)
+        direction = math.tanh(speed * self._inv_zero_speed)
         vp, bearing, joints, heads = mags
         comps = (direction * vp, direction * bearing, direction * joints, direction * heads)
         friction = comps[0] + comps[1] + comps[2] + comps[3]
-        theoretical = table.displacement_m3 * dp / (2.0 * math.pi)
-        inertia = cfg.rotor_inertia_kg_m2 * self._accel
-        drive_loss = direction * cfg.drive_loss_torque_nm
+        theoretical = self._torque_per_pa * dp
+        inertia = self._inertia * self._accel
+        drive_loss = direction * self._drive_loss
         expected = theoretical + friction + inertia + drive_loss
         efficiency = math.nan
-        if abs(speed) >= table.efficiency_min_speed_rad_s and \
-                abs(dp) >= table.efficiency_min_pressure_pa:
+        if abs(speed) >= self._eff_min_speed and abs(dp) >= self._eff_min_pressure:
             shaft = theoretical + friction + drive_loss  # steady-state torque
             efficiency = (theoretical / shaft if theoretical * speed > 0.0
                           else max(shaft / theoretical, 0.0))
         measured = residual = math.nan
         monitor = self.monitor
-        if self._fresh(self._torque, stamp_ns, self._max_age_ns):
-            measured = self._torque.value
+        torque = self._torque
+        if torque.stamp_ns is not None and abs(stamp_ns - torque.stamp_ns) <= self._max_age_ns:
+            measured = torque.value
             residual = measured - expected
             counts['residuals'] += 1
-            if abs(speed) >= cfg.monitor_min_speed_rad_s and \
-                    abs(self._accel) <= cfg.monitor_max_accel_rad_s2:
+            if abs(speed) >= self._monitor_min_speed and \
+                    abs(self._accel) <= self._monitor_max_accel:
                 sign = 1.0 if speed > 0.0 else -1.0
                 last = self._monitor_stamp_ns
-                dt = 0.0 if last is None else min((stamp_ns - last) * 1e-9,
-                                                  cfg.max_input_age_s)
+                dt = 0.0 if last is None else min((stamp_ns - last) * 1e-9, self._monitor_max_dt)
                 self._monitor_stamp_ns = stamp_ns
-                friction_part = (measured - theoretical - inertia) * sign - \
-                    cfg.drive_loss_torque_nm
-                monitor.update(dt, residual * sign, friction_part, vp,
-                               bearing + joints + heads)
+                friction_part = (measured - theoretical - inertia) * sign - self._drive_loss
+                monitor.update(dt, residual * sign, friction_part, vp, bearing + joints + heads)
                 counts['monitor_samples'] += 1
-        counts['estimates'] += 1
-        estimate = Estimate(
-            stamp_ns=stamp_ns, speed_rad_s=speed, pressure_diff_pa=dp,
-            viscosity_m2_s=viscosity, theoretical_nm=theoretical, components_nm=comps,
-            friction_nm=friction, inertia_nm=inertia, drive_loss_nm=drive_loss,
-            expected_nm=expected, efficiency=efficiency, measured_nm=measured,
-            residual_nm=residual, valve_plate_scale=monitor.theta_vp,
-            valve_plate_scale_std=monitor.valve_plate_scale_std, level=monitor.level,
-            table_flags=flags,
-            publish=(counts['estimates'] - 1) % cfg.output_decimation == 0)
+        n = counts['estimates'] = counts['estimates'] + 1
+        estimate = Estimate(stamp_ns, speed, dp, viscosity, theoretical, comps, friction, inertia,
+                            drive_loss, expected, efficiency, measured, residual,
+                            monitor.theta_vp, monitor.valve_plate_scale_std, monitor.level,
+                            flags, (n - 1) % self._decimation == 0)
         self.last = estimate
         return estimate
 

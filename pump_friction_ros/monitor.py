@@ -70,6 +70,7 @@ class WearMonitor:
         self._cap = CUSUM_CAP_RATIO * config.cusum_error_nm_s
         self._t_forget = config.rls_forgetting_time_s
         self._p_max = config.rls_initial_std**2
+        self._dt = self._a = self._lam = math.nan
         self.reset()
 
     def reset(self) -> None:
@@ -125,8 +126,12 @@ class WearMonitor:
         """
         self.samples += 1
         r = residual_nm
+        if dt_s != self._dt:  # samples usually come evenly spaced: compute the factors once
+            self._dt = dt_s
+            self._a = 1.0 - math.exp(-dt_s / self._tau)
+            self._lam = math.exp(-dt_s / self._t_forget)
+        a, lam = self._a, self._lam
         # EWMA of the residual and of its variance
-        a = 1.0 - math.exp(-dt_s / self._tau)
         dev = r - self.ewma_nm
         self.ewma_nm += a * dev
         self._var += a * (dev * dev - self._var)
@@ -139,7 +144,6 @@ class WearMonitor:
         self.cusum_neg_nm_s = 0.0 if neg < 0.0 else (cap if neg > cap else neg)
         self.level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         # weighted RLS with forgetting on (theta_vp, theta_rest)
-        lam = math.exp(-dt_s / self._t_forget)
         f1, f2 = valve_plate_nm, rest_nm
         p00, p01, p11 = self._p00, self._p01, self._p11
         pf1 = p00 * f1 + p01 * f2

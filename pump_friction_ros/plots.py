@@ -141,3 +141,77 @@ def write_model_figures(model: PumpModel, out_dir: Path) -> list[Path]:
     fig.suptitle('Fig. 19: torque efficiency map')
     save(fig, 'fig19_efficiency_map')
     return written
+
+
+def write_replay_figures(series: dict[str, list[float]], out_dir: Path, title: str
+                         ) -> list[Path]:
+    """PNG plots of a replay: torques, residual with monitor levels, scale, efficiency.
+
+    Parameters
+    ----------
+    series : dict of list
+        Published estimates: ``time_s``, ``expected_nm``, ``measured_nm``, ``residual_nm``,
+        ``scale``, ``scale_std``, ``efficiency``, ``level``.
+    out_dir : Path
+        Folder to write into (must exist).
+    title : str
+        Bag name for the titles.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    plt = _pyplot()
+    t = np.asarray(series['time_s'])
+    level = np.asarray(series['level'])
+    written = []
+
+    def shade(ax) -> None:
+        for value, colour, label in ((1, 'gold', 'WARN'), (2, 'tomato', 'ERROR')):
+            mask = level == value
+            if mask.any():
+                ax.fill_between(t, 0, 1, where=mask, color=colour, alpha=0.3, label=label,
+                                transform=ax.get_xaxis_transform(), step='post')
+
+    def save(fig, stem: str) -> None:
+        fig.suptitle(f'{fig._suptitle.get_text()}  [{title}]', fontsize=10)
+        fig.tight_layout()
+        path = out_dir / f'{stem}.png'
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ax.plot(t, series['measured_nm'], lw=0.5, label='measured')
+    ax.plot(t, series['expected_nm'], lw=0.8, label='expected')
+    ax.set(xlabel='time [s]', ylabel='torque [N m]')
+    ax.legend(fontsize=8)
+    fig.suptitle('Expected vs measured motor torque')
+    save(fig, 'torque')
+
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ax.plot(t, series['residual_nm'], lw=0.5, color='k', label='residual')
+    shade(ax)
+    ax.set(xlabel='time [s]', ylabel='residual [N m]')
+    ax.legend(fontsize=8)
+    fig.suptitle('Residual (measured - expected) and wear-monitor level')
+    save(fig, 'residual')
+
+    fig, ax = plt.subplots(figsize=(10, 4))
+    scale, std = np.asarray(series['scale']), np.asarray(series['scale_std'])
+    ax.plot(t, scale, label='valve-plate friction scale')
+    ax.fill_between(t, scale - 2 * std, scale + 2 * std, alpha=0.3, label='+-2 std')
+    ax.axhline(1.0, color='k', ls=':', lw=0.8)
+    shade(ax)
+    ax.set(xlabel='time [s]', ylabel='scale [-] (1 = as modelled)')
+    ax.legend(fontsize=8)
+    fig.suptitle('Valve-plate friction scale (RLS)')
+    save(fig, 'valve_plate_scale')
+
+    fig, ax = plt.subplots(figsize=(10, 4))
+    ax.plot(t, 100.0 * np.asarray(series['efficiency']), '.', ms=1)
+    ax.set(xlabel='time [s]', ylabel='torque efficiency [%]', ylim=(0, 100))
+    fig.suptitle('Torque efficiency (where defined)')
+    save(fig, 'efficiency')
+    return written

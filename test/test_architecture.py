@@ -13,7 +13,7 @@ LAYERS = {  # a module may import modules of its own layer or below
         'friction', 'model', 'paper', 'oil'},
     1: {'table', 'progress'},
     2: {'config', 'monitor', 'estimator', 'simulate', 'ros_messages'},
-    3: {'node', 'replay', 'bags', 'cli', 'plots', 'benchmark', 'calibrate'},
+    3: {'node', 'replay', 'bags', 'samples', 'cli', 'plots', 'benchmark', 'calibrate'},
 }
 LAYER_OF = {name: layer for layer, names in LAYERS.items() for name in names}
 

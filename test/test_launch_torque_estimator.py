@@ -29,7 +29,8 @@ PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml
 
 @pytest.mark.launch_test
 def generate_test_description():
-    env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='1', PYTHONUNBUFFERED='1')
+    env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='1', RCUTILS_LOGGING_BUFFERED_STREAM='1',
+               PYTHONUNBUFFERED='1')
     node = launch.actions.ExecuteProcess(
         cmd=[sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
              str(PARAMS)],

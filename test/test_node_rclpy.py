@@ -127,21 +127,26 @@ def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
     ex.add_node(probe)
     try:
         assert spin_until(ex, lambda: probe.count_subscribers('joint_states') > 0)
-        stamp = 20 * NS
+        expected = node.core.table.lookup(400.0, 100e5, 46e-6).input_nm + 0.05
         levels = []
-        for k in range(600):
-            expected = node.core.table.lookup(400.0, 100e5, 46e-6).input_nm + 0.05
-            wear = 0.0 if k < 200 else 1.0  # +1 N m of friction from k = 200 on
-            probe.send(stamp, 400.0, expected + wear, 100e5)
-            stamp += 1_000_000
-            ex.spin_once(timeout_sec=0.005)
-            levels += [level_from_msg(m.status[0].level) for m in probe.diagnostics]
+
+        def send(extra_nm):
+            # stamped from the node's clock: diagnostics age estimates against that clock
+            probe.send(node.get_clock().now().nanoseconds, 400.0, expected + extra_nm, 100e5)
+            ex.spin_once(timeout_sec=0.002)
+            levels.extend(level_from_msg(m.status[0].level) for m in probe.diagnostics)
             probe.diagnostics.clear()
+
+        end = time.monotonic() + 10.0
+        while 0 not in levels and time.monotonic() < end:  # OK before the wear step
+            send(0.0)
+        assert 0 in levels
+        for _ in range(600):
+            send(1.0)  # +1 N m of friction: a simulated wear step
         spin_until(ex, lambda: probe.diagnostics, 1.0)
         levels += [level_from_msg(m.status[0].level) for m in probe.diagnostics]
-        assert levels and levels[-1] in (level_from_msg(DiagnosticStatus.WARN),
-                                         level_from_msg(DiagnosticStatus.ERROR))
-        assert 0 in levels  # it was OK before the step
+        assert levels[-1] in (level_from_msg(DiagnosticStatus.WARN),
+                              level_from_msg(DiagnosticStatus.ERROR))
     finally:
         ex.shutdown()
         probe.destroy_node()

@@ -5,7 +5,11 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from rosbags.typesys import Stores, get_typestore
+
+try:
+    from rosbags.typesys import Stores, get_typestore
+except ImportError:  # a ROS shell without pip's rosbags: skip, do not break collection
+    pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
 from pump_friction_ros.config import EstimatorConfig
 from pump_friction_ros.estimator import TorqueEstimator
@@ -22,8 +26,8 @@ from pump_friction_ros.ros_messages import (
 )
 from pump_friction_ros.table import build_table
 
-STORE = get_typestore(Stores.ROS2_JAZZY)
-T = STORE.types
+STORE = get_typestore(Stores.ROS2_JAZZY) if 'get_typestore' in globals() else None
+T = STORE.types if STORE is not None else {}
 
 
 def roundtrip(msg, msgtype):
@@ -122,8 +126,7 @@ def test_outputs_skip_undefined_values(estimator):
     assert topics['expected_torque'] == est.expected_nm
     assert topics['residual'] == est.residual_nm
     assert 'efficiency' in topics
-    stale_torque = type(est)(**{**est.__dict__, 'residual_nm': math.nan,
-                                'efficiency': math.nan})
+    stale_torque = est._replace(residual_nm=math.nan, efficiency=math.nan)
     assert set(dict(outputs_of(stale_torque))) == {'expected_torque', 'friction_torque',
                                                     'valve_plate_friction_scale'}
 
