@@ -40,15 +40,15 @@ LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
 
 @dataclass(frozen=True)
 class MonitorConfig:
-    """Monitor tuning (see the module docstring); SI units."""
+    """Monitor tuning (see the module docstring); SI units. Defaults live in ``config``."""
 
-    ewma_time_constant_s: float = 2.0
-    cusum_drift_nm: float = 0.1
-    cusum_warn_nm_s: float = 1.5
-    cusum_error_nm_s: float = 5.0
-    cusum_clear_ratio: float = 0.5
-    rls_forgetting_time_s: float = 30.0
-    rls_initial_std: float = 0.5
+    ewma_time_constant_s: float
+    cusum_drift_nm: float
+    cusum_warn_nm_s: float
+    cusum_error_nm_s: float
+    cusum_clear_ratio: float
+    rls_forgetting_time_s: float
+    rls_initial_std: float
 
 
 class WearMonitor:
