@@ -438,6 +438,16 @@ class BagInputs:
         """JointState messages without the configured joint (skipped)."""
         return sum(d.missing_joint for d in self._decoders.values())
 
+    def meta(self) -> dict:
+        """Return what the replay needs first: storage, time span, input message count."""
+        return {'storage': self.storage, 'start_ns': self.start_ns, 'end_ns': self.end_ns,
+                'input_message_count': self.input_message_count}
+
+    def stats(self) -> dict:
+        """Return what reading found: messages per topic, fallbacks, undecodable, no joint."""
+        return {'messages_read': dict(self.messages_read), 'fallbacks': self.fallbacks,
+                'undecodable': self.undecodable, 'missing_joint': self.missing_joint}
+
     def chunks(self) -> Iterator[Chunk]:
         """Yield the decoded input events in bag order, a chunk at a time.
 

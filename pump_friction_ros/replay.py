@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import math
+import multiprocessing
 import os
 import shutil
 import struct
@@ -191,8 +192,8 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
                out_bag: str | Path | None = None, csv_path: str | Path | None = None,
                plots_dir: str | Path | None = None, remaps: dict[str, str] | None = None,
                storage: str | None = None, force: bool = False, progress: bool = False,
-               keep_estimates: bool = False, core: TorqueEstimator | None = None
-               ) -> ReplaySummary:
+               keep_estimates: bool = False, core: TorqueEstimator | None = None,
+               pipeline: bool | None = None) -> ReplaySummary:
     """Replay one bag through the estimator core.
 
     Parameters
@@ -219,6 +220,10 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
         Keep every estimate in the summary (tests).
     core : TorqueEstimator, optional
         Core to use (default: built from ``config``).
+    pipeline : bool, optional
+        Read and write the bags in two helper processes while this one runs the core
+        (default: yes, unless this process is daemonic, e.g. a Dask worker). The results
+        are the same either way: the core runs here, in bag order.
 
     Returns
     -------
@@ -230,98 +235,295 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
     BagError
         Unusable bag or output path; nothing is left behind.
     """
-    from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
-
     started = time.perf_counter()
     config = config or EstimatorConfig()
+    if pipeline is None:
+        pipeline = not multiprocessing.current_process().daemon
     staged: list[_Staged] = []
-    with ExitStack() as stack:
-        inputs = stack.enter_context(BagInputs(bag, config, remaps))
+    source = (_ProcessSource if pipeline else _InlineSource)(bag, config, remaps)
+    sink = None
+    try:
         core = core or estimator_from_config(config)
-        summary = ReplaySummary(bag=str(bag), storage=inputs.storage)
-        try:
-            def stage(path, is_dir):
-                if path is None:
-                    return None
-                staged.append(_Staged(Path(path), force, is_dir))
-                return staged[-1]
+        summary = ReplaySummary(bag=str(bag), storage=source.meta['storage'])
 
-            out = stage(out_bag, False)
-            table = stage(csv_path, False)
-            figs = stage(plots_dir, True)
-            writer = None
-            if out is not None:
-                kind = storage or inputs.storage
-                plugin = StoragePlugin.MCAP if kind == 'mcap' else StoragePlugin.SQLITE3
-                writer = stack.enter_context(Writer(out.path, version=9,
-                                                    storage_plugin=plugin))
+        def stage(path, is_dir):
+            if path is None:
+                return None
+            staged.append(_Staged(Path(path), force, is_dir))
+            return staged[-1]
+
+        out = stage(out_bag, False)
+        table = stage(csv_path, False)
+        figs = stage(plots_dir, True)
+        if out is not None:
+            sink = (_ProcessSink if pipeline else _InlineSink)(
+                out.path, storage or source.meta['storage'])
+        with ExitStack() as stack:
             csv_file = stack.enter_context(open(table.path, 'w', newline='')) if table \
                 else None
-            series = _run(inputs, core, config, summary, writer, csv_file, keep_estimates,
+            series = _run(source, core, config, summary, sink, csv_file, keep_estimates,
                           progress)
-            stack.close()  # close writer and CSV before moving them into place
-            if figs is not None:
-                from .plots import write_replay_figures
-                write_replay_figures(series, figs.path, Path(bag).name)
-            for item, kind in ((out, 'bag'), (table, 'csv'), (figs, 'plots')):
-                if item is not None:
-                    item.commit()
-                    summary.outputs[kind] = str(item.target)
-        except BaseException as exc:
-            for item in staged:
-                item.discard()
-            if isinstance(exc, WriterError):
-                raise BagError(f'cannot write output bag: {exc}') from None
-            raise
+        if sink is not None:
+            sink.close()
+        if figs is not None:
+            from .plots import write_replay_figures
+            write_replay_figures(series, figs.path, Path(bag).name)
+        for item, kind in ((out, 'bag'), (table, 'csv'), (figs, 'plots')):
+            if item is not None:
+                item.commit()
+                summary.outputs[kind] = str(item.target)
+    except BaseException:
+        if sink is not None:
+            sink.abort()
+        for item in staged:
+            item.discard()
+        raise
+    finally:
+        source.close()
     summary.elapsed_s = time.perf_counter() - started
     return summary
 
 
-def _run(inputs: BagInputs, core: TorqueEstimator, config: EstimatorConfig,
-         summary: ReplaySummary, writer, csv_file, keep_estimates: bool, progress: bool):
+def _output_topics() -> list[tuple[str, str]]:
+    """Topics and types of the output bag: the node's Float64 outputs, then /diagnostics."""
+    return [(f'/{NODE_NAME}/{name}', 'std_msgs/msg/Float64') for name in OUTPUT_TOPICS] + \
+        [('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray')]
+
+
+_DIAGNOSTICS_INDEX = len(OUTPUT_TOPICS)
+_OUTPUT_INDEX = {name: i for i, name in enumerate(OUTPUT_TOPICS)}
+
+
+# -- sources: decoded input chunks, read here or in a helper process -----------------------
+
+
+class _InlineSource:
+    """Reads and decodes the bag in this process."""
+
+    def __init__(self, bag, config, remaps) -> None:
+        self._inputs = BagInputs(bag, config, remaps)
+        self.meta = self._inputs.meta()
+
+    def chunks(self):
+        yield from self._inputs.chunks()
+
+    def stats(self) -> dict:
+        return self._inputs.stats()
+
+    def close(self) -> None:
+        self._inputs.close()
+
+
+def _reader_process(conn, bag, config, remaps) -> None:
+    """Read and batch-decode the bag in a helper process; send the chunks down the pipe."""
+    try:
+        with BagInputs(bag, config, remaps) as inputs:
+            conn.send(('meta', inputs.meta()))
+            for chunk in inputs.chunks():
+                conn.send(('chunk', chunk))
+            conn.send(('done', inputs.stats()))
+    except BagError as exc:
+        conn.send(('error', str(exc)))
+    except Exception as exc:  # report, never hang the replay
+        conn.send(('error', f'{type(exc).__name__}: {exc}'))
+    finally:
+        conn.close()
+
+
+class _ProcessSource:
+    """Reads and decodes the bag in a helper process, one chunk ahead of the core."""
+
+    def __init__(self, bag, config, remaps) -> None:
+        ctx = multiprocessing.get_context()
+        self._conn, child = ctx.Pipe(duplex=False)
+        self._proc = ctx.Process(target=_reader_process, args=(child, str(bag), config,
+                                                               remaps), daemon=True)
+        self._proc.start()
+        child.close()
+        self._stats: dict = {}
+        kind, payload = self._receive()
+        if kind != 'meta':
+            raise BagError(f'bag reader: unexpected {kind}')
+        self.meta = payload
+
+    def _receive(self):
+        try:
+            kind, payload = self._conn.recv()
+        except EOFError:
+            raise BagError('the bag reader process died') from None
+        if kind == 'error':
+            self.close()
+            raise BagError(payload)
+        return kind, payload
+
+    def chunks(self):
+        while True:
+            kind, payload = self._receive()
+            if kind == 'done':
+                self._stats = payload
+                return
+            yield payload
+
+    def stats(self) -> dict:
+        return self._stats
+
+    def close(self) -> None:
+        if self._proc.is_alive():
+            self._proc.terminate()
+        self._proc.join()
+        self._conn.close()
+
+
+# -- sinks: the output bag, written here or in a helper process -------------------------------
+
+
+def _open_writer(path, storage: str):
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    writer = Writer(path, version=9, storage_plugin=plugin)
+    writer.open()
+    connections = [writer.add_connection(topic, msgtype, typestore=typestore)
+                   for topic, msgtype in _output_topics()]
+    return writer, connections
+
+
+class _InlineSink:
+    """Writes the output bag in this process."""
+
+    def __init__(self, path, storage: str) -> None:
+        try:
+            self._writer, self._connections = _open_writer(path, storage)
+        except Exception as exc:  # WriterError and storage errors
+            raise BagError(f'cannot write output bag {path}: {exc}') from None
+
+    def write(self, index: int, log_ns: int, payload: bytes) -> None:
+        self._writer.write(self._connections[index], log_ns, payload)
+
+    def flush(self) -> None:
+        pass
+
+    def close(self) -> None:
+        self._writer.close()
+
+    def abort(self) -> None:
+        try:
+            self._writer.close()
+        except Exception:  # the staged output is discarded anyway
+            pass
+
+
+def _writer_process(conn, path, storage) -> None:
+    """Write the batches received into the output bag (in a helper process)."""
+    try:
+        writer, connections = _open_writer(path, storage)
+        try:
+            while True:
+                batch = conn.recv()
+                if batch is None:
+                    break
+                for index, log_ns, payload in zip(*batch, strict=True):
+                    writer.write(connections[index], log_ns, payload)
+        finally:
+            writer.close()
+        conn.send(('ok', ''))
+    except Exception as exc:
+        conn.send(('error', f'cannot write output bag {path}: {exc}'))
+    finally:
+        conn.close()
+
+
+class _ProcessSink:
+    """Writes the output bag in a helper process, in batches, while the core runs."""
+
+    def __init__(self, path, storage: str) -> None:
+        ctx = multiprocessing.get_context()
+        self._conn, child = ctx.Pipe(duplex=True)
+        self._proc = ctx.Process(target=_writer_process, args=(child, str(path), storage),
+                                 daemon=True)
+        self._proc.start()
+        child.close()
+        self._batch: tuple[list, list, list] = ([], [], [])
+
+    def write(self, index: int, log_ns: int, payload: bytes) -> None:
+        batch = self._batch
+        batch[0].append(index)
+        batch[1].append(log_ns)
+        batch[2].append(payload)
+
+    def flush(self) -> None:
+        if self._batch[0]:
+            self._send(self._batch)
+            self._batch = ([], [], [])
+
+    def _send(self, item) -> None:
+        try:
+            self._conn.send(item)
+        except (BrokenPipeError, OSError):
+            self._finish()  # the writer died: report its error
+
+    def _finish(self) -> None:
+        try:
+            kind, message = self._conn.recv()
+        except EOFError:
+            kind, message = 'error', 'the bag writer process died'
+        self._proc.join()
+        self._conn.close()
+        if kind != 'ok':
+            raise BagError(message)
+
+    def close(self) -> None:
+        self.flush()
+        self._send(None)
+        self._finish()
+
+    def abort(self) -> None:
+        if self._proc.is_alive():
+            self._proc.terminate()
+        self._proc.join()
+        self._conn.close()
+
+
+def _run(source, core: TorqueEstimator, config: EstimatorConfig, summary: ReplaySummary,
+         sink, csv_file, keep_estimates: bool, progress: bool):
     """Run the replay loop: events in bag order -> core -> outputs."""
     from rosbags.typesys import Stores, get_typestore
 
     typestore = get_typestore(Stores.ROS2_JAZZY)
     types = rosbags_types(typestore)
-    connections = {}
-    diag_conn = None
-    if writer is not None:
-        for name in OUTPUT_TOPICS:
-            connections[name] = writer.add_connection(f'/{NODE_NAME}/{name}',
-                                                      'std_msgs/msg/Float64',
-                                                      typestore=typestore)
-        diag_conn = writer.add_connection('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray',
-                                          typestore=typestore)
     rows = csv.writer(csv_file) if csv_file is not None else None
     if rows is not None:
         rows.writerow(CSV_COLUMNS)
     status_name = f'{NODE_NAME}: {core.pump_name}'
     period_ns = round(1e9 / config.diagnostics_rate_hz)
-    start_ns = inputs.start_ns
+    meta = source.meta
+    start_ns = meta['start_ns']
     next_tick = start_ns + period_ns
     levels = _LevelTracker()
     series: dict[str, list[float]] = {k: [] for k in (
         'time_s', 'expected_nm', 'measured_nm', 'residual_nm', 'scale', 'scale_std',
         'efficiency', 'level')}
     kept: list[Estimate] = []
-    total = max(inputs.input_message_count, 1)
+    total = max(meta['input_message_count'], 1)
     done = 0
     max_scale = -math.inf
     last_stamp = start_ns
     on_joint, on_pressure, on_port = core.on_joint_state, core.on_pressure, core.on_port_pressure
     on_speed, on_torque, on_temperature = core.on_speed, core.on_torque, core.on_temperature
-    write = writer.write if writer is not None else None
+    write = sink.write if sink is not None else None
+    output_index = _OUTPUT_INDEX
 
     def emit_diagnostics(tick_ns: int) -> None:
         if write is not None:
             msg = diagnostic_array(types, core.diagnostics(tick_ns), tick_ns, status_name,
                                    config.hardware_id)
-            write(diag_conn, tick_ns,
-                  typestore.serialize_cdr(msg, 'diagnostic_msgs/msg/DiagnosticArray'))
+            write(_DIAGNOSTICS_INDEX, tick_ns,
+                  bytes(typestore.serialize_cdr(msg, 'diagnostic_msgs/msg/DiagnosticArray')))
 
     with ProgressBar(f'replay {Path(summary.bag).name}', enabled=progress) as bar:
-        for chunk in inputs.chunks():
+        for chunk in source.chunks():
             for kind, stamp, log_ns, value, torque, has_speed in zip(
                     chunk.kinds, chunk.stamps, chunk.log_times, chunk.values, chunk.torques,
                     chunk.has_speed, strict=True):
@@ -356,7 +558,7 @@ def _run(inputs: BagInputs, core: TorqueEstimator, config: EstimatorConfig,
                     summary.published += 1
                     if write is not None:
                         for name, v in outputs_of(est):
-                            write(connections[name], log_ns, float64_cdr(v))
+                            write(output_index[name], log_ns, float64_cdr(v))
                     if est.valve_plate_scale > max_scale:
                         max_scale = est.valve_plate_scale
                     for key, v in (('time_s', (est.stamp_ns - start_ns) * 1e-9),
@@ -368,19 +570,22 @@ def _run(inputs: BagInputs, core: TorqueEstimator, config: EstimatorConfig,
                                    ('efficiency', est.efficiency), ('level', est.level)):
                         series[key].append(v)
             done += len(chunk.kinds)
+            if sink is not None:
+                sink.flush()
             bar(done / total)
-        end_ns = inputs.end_ns
+        end_ns = meta['end_ns']
         while next_tick <= end_ns:
             emit_diagnostics(next_tick)
             next_tick += period_ns
     levels.finish(last_stamp)
-    summary.duration_s = (inputs.end_ns - start_ns) * 1e-9
-    summary.messages_read = dict(inputs.messages_read)
+    stats = source.stats()
+    summary.duration_s = (meta['end_ns'] - start_ns) * 1e-9
+    summary.messages_read = dict(stats['messages_read'])
     summary.estimates = core.counts['estimates']
     summary.counts = dict(core.counts)
-    summary.decoded_one_by_one = inputs.fallbacks
-    summary.undecodable = inputs.undecodable
-    summary.missing_joint = inputs.missing_joint
+    summary.decoded_one_by_one = stats['fallbacks']
+    summary.undecodable = stats['undecodable']
+    summary.missing_joint = stats['missing_joint']
     summary.warn_intervals = [((a - start_ns) * 1e-9, (b - start_ns) * 1e-9)
                               for a, b in levels.warn]
     summary.error_intervals = [((a - start_ns) * 1e-9, (b - start_ns) * 1e-9)

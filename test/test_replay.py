@@ -311,3 +311,17 @@ def test_every_input_message_is_read(bags):
 
 def test_node_defaults_replay_too(bags):
     assert replay_bag(bags['nominal'], EstimatorConfig()).estimates == 12000
+
+
+def test_pipelined_and_inline_replays_write_identical_bags(tmp_path, bags, table):
+    results = {}
+    for pipeline in (True, False):
+        out = tmp_path / f'out_{pipeline}'
+        summary = replay_bag(bags['wear'], CONFIG, out_bag=out, keep_estimates=True,
+                             core=core_for(table), pipeline=pipeline)
+        with Reader(out) as reader:
+            messages = [(c.topic, t, bytes(raw)) for c, t, raw in reader.messages()]
+        results[pipeline] = (summary.estimates_list, summary.messages_read, messages)
+    assert results[True][1] == results[False][1]
+    assert results[True][2] == results[False][2]
+    assert all(same(a, b) for a, b in zip(results[True][0], results[False][0], strict=True))
