@@ -281,6 +281,20 @@ def _cmd_make_sample_bags(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_calibrate(args: argparse.Namespace) -> int:
+    from .bags import parse_remaps
+    from .calibrate import calibrate
+    from .config import load_estimator_config
+    from .params import config_dir
+
+    config = load_estimator_config(args.params or config_dir() / 'torque_estimator.yaml')
+    result = calibrate(args.inputs, args.pump, args.out, report_dir=args.report, fix=args.fix,
+                       config=config, remaps=parse_remaps(args.topic_remap),
+                       steady_only=not args.whole_record, force=args.force)
+    print(result.format())
+    return 0
+
+
 def _add_pump(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--pump', metavar='FILE', default=None,
                         help='pump parameter YAML (default: config/pumps/hong_doh_2004.yaml)')
@@ -375,6 +389,24 @@ def build_parser() -> argparse.ArgumentParser:
                    default=75.0, metavar='S', help='length of each bag [s] (default 75)')
     _add_pump(p)
     p.set_defaults(func=_cmd_make_sample_bags)
+
+    p = sub.add_parser('calibrate', help='fit the open friction parameters to data')
+    p.add_argument('inputs', nargs='+', metavar='INPUT',
+                   help='bench CSV files (speed_rpm, pressure_bar, torque_nm[, viscosity_cst '
+                   '| temperature_c]) or rosbag2 bags')
+    p.add_argument('--pump', required=True, metavar='BASE.yaml', help='base pump file')
+    p.add_argument('--out', required=True, metavar='MY_PUMP.yaml', help='calibrated pump file')
+    p.add_argument('--report', metavar='DIR', default=None, help='report.json and PNG plots')
+    p.add_argument('--fix', nargs='+', default=[], metavar='NAME',
+                   help='hold these at their base values (see README)')
+    p.add_argument('--params', metavar='FILE', default=None,
+                   help='node parameters (bags: topics, filter; oil; inertia and drive loss '
+                   'start values)')
+    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW')
+    p.add_argument('--whole-record', action='store_true',
+                   help='bags: fit friction on every sample, not only near-steady ones')
+    p.add_argument('--force', action='store_true', help='replace an existing output file')
+    p.set_defaults(func=_cmd_calibrate)
 
     p = sub.add_parser('plot', help='PNG figures in the manner of the paper\'s')
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')

@@ -68,6 +68,7 @@ class Estimate(NamedTuple):
     components_nm: tuple[float, float, float, float]  # COMPONENTS order, signed
     friction_nm: float
     inertia_nm: float
+    accel_rad_s2: float  # filtered shaft acceleration
     drive_loss_nm: float
     expected_nm: float
     efficiency: float  # NaN where undefined (near zero speed or pressure)
@@ -342,7 +343,7 @@ class TorqueEstimator:
                 counts['monitor_samples'] += 1
         n = counts['estimates'] = counts['estimates'] + 1
         estimate = Estimate(stamp_ns, speed, dp, viscosity, theoretical, comps, friction, inertia,
-                            drive_loss, expected, efficiency, measured, residual,
+                            self._accel, drive_loss, expected, efficiency, measured, residual,
                             monitor.theta_vp, monitor.valve_plate_scale_std, monitor.level,
                             flags, (n - 1) % self._decimation == 0)
         self.last = estimate

@@ -407,6 +407,9 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
         efficiency_min_pressure_pa=op.number('efficiency_min_pressure_pa', low=0.0),
     )
     op.finish()
+    if 'provenance' in data:  # written by `pump_friction calibrate`; not a parameter
+        if not isinstance(top.raw('provenance'), dict):
+            raise ConfigError(f'{where}: provenance: expected a mapping')
     top.finish()
     return PumpParams(name=name, description=description, geometry=geometry, piston=piston,
                       valve_plate=valve_plate, bearing=bearing, piston_friction=piston_friction,

@@ -49,8 +49,8 @@ __all__ = ['CSV_COLUMNS', 'ReplayJob', 'ReplaySummary', 'discover_bags', 'fleet_
 
 CSV_COLUMNS = ('stamp_ns', 'time_s', 'speed_rad_s', 'pressure_diff_pa', 'viscosity_m2_s',
                'theoretical_nm', *(f'{c}_nm' for c in COMPONENTS), 'friction_nm',
-               'inertia_nm', 'drive_loss_nm', 'expected_nm', 'measured_nm', 'residual_nm',
-               'efficiency', 'valve_plate_scale', 'valve_plate_scale_std', 'level',
+               'inertia_nm', 'accel_rad_s2', 'drive_loss_nm', 'expected_nm', 'measured_nm',
+               'residual_nm', 'efficiency', 'valve_plate_scale', 'valve_plate_scale_std', 'level',
                'table_flags', 'published')
 
 _CDR_LE = b'\x00\x01\x00\x00'
@@ -603,7 +603,7 @@ def _run(source, core: TorqueEstimator, config: EstimatorConfig, summary: Replay
 def _csv_row(est: Estimate, start_ns: int) -> list:
     return [est.stamp_ns, f'{(est.stamp_ns - start_ns) * 1e-9:.6f}', est.speed_rad_s,
             est.pressure_diff_pa, est.viscosity_m2_s, est.theoretical_nm, *est.components_nm,
-            est.friction_nm, est.inertia_nm, est.drive_loss_nm, est.expected_nm,
+            est.friction_nm, est.inertia_nm, est.accel_rad_s2, est.drive_loss_nm, est.expected_nm,
             est.measured_nm, est.residual_nm, est.efficiency, est.valve_plate_scale,
             est.valve_plate_scale_std, est.level, est.table_flags, int(est.publish)]
 

@@ -1,0 +1,154 @@
+"""Calibration: synthetic data with known parameters, the nominal sample bag, bad input."""
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pump_friction_ros.calibrate import (
+    CalibrationError,
+    calibrate,
+    correlation_time,
+    fitted_pump,
+)
+from pump_friction_ros.cli import main
+from pump_friction_ros.config import load_estimator_config
+from pump_friction_ros.model import PumpModel
+from pump_friction_ros.params import load_pump
+from pump_friction_ros.table import cached_table
+
+REPO = Path(__file__).resolve().parents[1]
+BASE = REPO / 'config' / 'pumps' / 'hong_doh_2004.yaml'
+CONFIG = load_estimator_config(REPO / 'config' / 'torque_estimator.yaml')
+NOISE_NM = 0.02
+
+
+def write_bench(path, pump, rpms, bars, seed=0, noise=NOISE_NM):
+    r, b = np.meshgrid(np.asarray(rpms, float), np.asarray(bars, float))
+    cst = np.where(np.arange(r.size) % 2 == 0, 46.0, 32.0)
+    res = PumpModel(pump).evaluate(r.ravel() * math.pi / 30, b.ravel() * 1e5, cst / 1e6)
+    torque = res.input_nm + np.random.default_rng(seed).normal(0.0, noise, r.size)
+    with open(path, 'w', newline='') as handle:
+        out = csv.writer(handle)
+        out.writerow(['speed_rpm', 'pressure_bar', 'torque_nm', 'viscosity_cst'])
+        out.writerows(zip(r.ravel(), b.ravel(), torque, cst, strict=True))
+    return path
+
+
+TRUTH = np.array([1.3, 1.25, 1.5, 0.7, 1.0, 1.0, 0.0, 0.0])  # coulomb, viscous, f1, f0, ...
+
+
+def test_fit_recovers_known_parameters_within_their_intervals(tmp_path):
+    base = load_pump(BASE)
+    truth = fitted_pump(base, TRUTH, 'truth')
+    data = write_bench(tmp_path / 'bench.csv', truth,
+                       [100, 130, 160, 200, 300, 500, 1000, 2000, 3500, 5000, 7000, 9000],
+                       np.linspace(20, 300, 8))
+    result = calibrate([data], BASE, tmp_path / 'mine.yaml',
+                       fix=['piston_friction.joint', 'piston_friction.head'])
+    by_name = {p.name: p for p in result.parameters}
+    for k, name in enumerate(('valve_plate.coulomb', 'valve_plate.viscous', 'bearing.f1',
+                              'bearing.f0')):
+        p = by_name[name]
+        assert p.status == 'fitted'
+        assert abs(p.fitted - TRUTH[k]) <= p.ci95, (name, p.fitted, p.ci95)
+    assert by_name['piston_friction.joint'].status == 'fixed'
+    assert result.cv_rmse_nm == pytest.approx(NOISE_NM, rel=0.3)  # held-out ~ noise
+    assert result.rmse_after_nm < 0.25 * result.rmse_before_nm
+
+
+def test_one_speed_cannot_separate_coulomb_from_viscous_and_says_so(tmp_path):
+    base = load_pump(BASE)
+    truth = fitted_pump(base, TRUTH, 'truth')
+    data = write_bench(tmp_path / 'one_speed.csv', truth, [3000], np.linspace(20, 300, 16))
+    out = tmp_path / 'mine.yaml'
+    result = calibrate([data], BASE, out)
+    flagged = {p.name for p in result.parameters if p.status == 'unidentifiable'}
+    assert {'valve_plate.viscous', 'bearing.f0'} & flagged  # both constant at one speed
+    assert any('cannot be identified' in w for w in result.warnings)
+    written = load_pump(out)
+    if 'valve_plate.viscous' in flagged:  # left at the base value in the file
+        assert written.valve_plate.film_clearance_m == base.valve_plate.film_clearance_m
+    if 'bearing.f0' in flagged:
+        assert written.bearing.f0 == base.bearing.f0
+
+
+def test_nominal_sample_bag_is_consistent_with_the_papers_pump(tmp_path, monkeypatch):
+    monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path / 'cache'))
+    result = calibrate([REPO / 'bags' / 'eha_nominal'], BASE, tmp_path / 'fit.yaml',
+                       config=CONFIG)
+    assert 'near-steady' in result.selection and 'whole record' in result.selection
+    fitted = [p for p in result.parameters if p.status == 'fitted']
+    assert len(fitted) >= 4
+    truth = {'rotor_inertia_kg_m2': 2e-4, 'drive_loss_torque_nm': 0.05}  # the simulation's
+    for p in fitted:
+        expected = truth.get(p.name, 1.0)
+        assert abs(p.fitted - expected) <= p.ci95, (p.name, p.fitted, p.ci95)
+
+
+def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_path,
+                                                                       monkeypatch):
+    monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path / 'cache'))
+    base = load_pump(BASE)
+    data = write_bench(tmp_path / 'b.csv', fitted_pump(base, TRUTH, 't'),
+                       [300, 1000, 3000, 6000, 9000], [50, 150, 250])
+    out = tmp_path / 'my_pump.yaml'
+    calibrate([data], BASE, out, report_dir=tmp_path / 'report')
+    text = out.read_text()
+    assert '# Table 1' in text  # the base file's comments are kept
+    import yaml
+    prov = yaml.safe_load(text)['provenance']
+    assert prov['inputs'][0]['sha256'] and prov['base_pump']['sha256'] == base.sha256
+    assert set(prov['fit']) >= {'rmse_before_nm', 'rmse_after_nm', 'cv_rmse_nm'}
+    pump = load_pump(out)
+    assert pump.name == 'my_pump' and pump.sha256 != base.sha256
+    table = cached_table(pump)
+    assert table.pump_sha256 == pump.sha256
+    assert sorted(p.name for p in (tmp_path / 'report').glob('*.png')) == [
+        'residual.png', 'torque_vs_pressure.png', 'torque_vs_speed.png']
+    from pump_friction_ros.config import EstimatorConfig
+    from pump_friction_ros.replay import replay_bag
+    summary = replay_bag(REPO / 'bags' / 'eha_nominal',
+                         EstimatorConfig(pump_file=str(out), oil_viscosity_m2_s=46e-6))
+    assert summary.estimates == 75000
+
+
+@pytest.mark.parametrize(('content', 'message'), [
+    ('speed_rpm,pressure_bar,torque_nm\n1000,100,nan\n', 'not finite'),
+    ('speed_rpm,pressure_bar,torque_nm\n1000,fast,8\n', 'not a number'),
+    ('speed_rpm,torque_nm\n1000,8\n', 'missing column'),
+    ('speed_rpm,pressure_bar,torque_nm\n1000,1.0e7,8\n2000,2.0e7,16\n', 'looks like Pa'),
+    ('speed_rpm,pressure_bar,torque_nm,viscosity_cst\n1000,100,8,4.6e-5\n', 'm\\^2/s'),
+    ('speed_rpm,pressure_bar,torque_nm\n5,100,8\n6,150,12\n', 'no usable samples'),
+    ('speed_rpm,pressure_bar,torque_nm\n1000,100,8\n2000,150,12\n', 'too few'),
+    ('speed_rpm,pressure_bar,torque_nm\n', 'no data rows'),
+])
+def test_bad_input_is_refused_and_writes_nothing(tmp_path, content, message):
+    data = tmp_path / 'bad.csv'
+    data.write_text(content)
+    out = tmp_path / 'out.yaml'
+    with pytest.raises(CalibrationError, match=message):
+        calibrate([data], BASE, out)
+    assert not out.exists() and not list(tmp_path.glob('out.yaml*'))
+
+
+def test_cli_exits_2_with_one_line_on_bad_arguments(tmp_path, capsys):
+    data = write_bench(tmp_path / 'b.csv', load_pump(BASE), [1000, 3000], [100, 200])
+    for argv in (['calibrate', str(data), '--pump', str(BASE), '--out', str(tmp_path / 'o.yaml'),
+                  '--fix', 'bearing.f9'],
+                 ['calibrate', str(tmp_path / 'missing.csv'), '--pump', str(BASE), '--out',
+                  str(tmp_path / 'o.yaml')]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.startswith('pump_friction: error: ') and err.count('\n') == 1
+    assert not (tmp_path / 'o.yaml').exists()
+
+
+def test_correlation_time_is_one_for_white_noise_and_grows_with_smoothing():
+    rng = np.random.default_rng(0)
+    white = rng.normal(size=20000)
+    assert correlation_time(white) == pytest.approx(1.0, abs=0.1)
+    smooth = np.convolve(white, np.ones(10) / 10, mode='same')  # 10-sample moving average
+    assert correlation_time(smooth) == pytest.approx(10.0, rel=0.2)
