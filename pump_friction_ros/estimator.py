@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from .config import EstimatorConfig
-from .model import COMPONENTS
+from .model import COMPONENTS, efficiency_of
 from .monitor import LEVEL_NAMES, OK, STALE, MonitorConfig, WearMonitor
 from .oil import WaltherViscosity
 from .params import load_pump
@@ -320,11 +320,8 @@ class TorqueEstimator:
         inertia = self._inertia * self._accel
         drive_loss = direction * self._drive_loss
         expected = theoretical + friction + inertia + drive_loss
-        efficiency = math.nan
-        if abs(speed) >= self._eff_min_speed and abs(dp) >= self._eff_min_pressure:
-            shaft = theoretical + friction + drive_loss  # steady-state torque
-            efficiency = (theoretical / shaft if theoretical * speed > 0.0
-                          else max(shaft / theoretical, 0.0))
+        efficiency = efficiency_of(theoretical, theoretical + friction + drive_loss, speed, dp,
+                                   self._eff_min_speed, self._eff_min_pressure)
         measured = residual = math.nan
         monitor = self.monitor
         torque = self._torque

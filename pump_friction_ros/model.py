@@ -39,6 +39,7 @@ __all__ = [
     'PumpModel',
     'TorqueResult',
     'Waveforms',
+    'efficiency_of',
     'input_torque_nm',
     'theoretical_torque_nm',
     'torque_efficiency',
@@ -125,6 +126,39 @@ def torque_efficiency(theoretical_nm: np.ndarray, input_nm: np.ndarray, speed_ra
     valid = (np.abs(speed) >= min_speed_rad_s) & (np.abs(dp) >= min_pressure_pa) & \
         np.isfinite(eff)
     return np.where(valid, eff, np.nan)
+
+
+def efficiency_of(theoretical_nm: float, shaft_nm: float, speed_rad_s: float,
+                  pressure_diff_pa: float, min_speed_rad_s: float,
+                  min_pressure_pa: float) -> float:
+    """Scalar twin of `torque_efficiency` (pure Python, for the per-sample paths).
+
+    Parameters
+    ----------
+    theoretical_nm : float
+        Theoretical torque [N*m].
+    shaft_nm : float
+        Steady-state shaft torque [N*m].
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    pressure_diff_pa : float
+        Pressure difference [Pa].
+    min_speed_rad_s : float
+        |speed| below which the efficiency is undefined [rad/s].
+    min_pressure_pa : float
+        |dp| below which the efficiency is undefined [Pa].
+
+    Returns
+    -------
+    float
+        Efficiency [-] per mode, NaN where undefined.
+    """
+    if abs(speed_rad_s) < min_speed_rad_s or abs(pressure_diff_pa) < min_pressure_pa \
+            or shaft_nm == 0.0 or theoretical_nm == 0.0:
+        return math.nan
+    if theoretical_nm * speed_rad_s > 0.0:
+        return theoretical_nm / shaft_nm
+    return max(shaft_nm / theoretical_nm, 0.0)
 
 
 @dataclass(frozen=True)

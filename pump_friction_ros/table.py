@@ -30,7 +30,13 @@ import numpy as np
 
 from . import MODEL_VERSION, __version__
 from .errors import TableError
-from .model import COMPONENTS, PumpModel, theoretical_torque_nm, torque_efficiency
+from .model import (
+    COMPONENTS,
+    PumpModel,
+    efficiency_of,
+    theoretical_torque_nm,
+    torque_efficiency,
+)
 from .params import PumpParams
 from .units import BAR_TO_PA, CST_PER_M2_S, RPM_TO_RAD_S
 
@@ -354,10 +360,8 @@ class FrictionTable:
         friction = comps[0] + comps[1] + comps[2] + comps[3]
         theoretical = self.displacement_m3 * dp / (2.0 * math.pi)
         tin = theoretical + friction
-        eff = math.nan
-        if abs(speed) >= self.efficiency_min_speed_rad_s and \
-                abs(dp) >= self.efficiency_min_pressure_pa and tin != 0.0:
-            eff = theoretical / tin if theoretical * speed > 0.0 else max(tin / theoretical, 0.0)
+        eff = efficiency_of(theoretical, tin, speed, dp, self.efficiency_min_speed_rad_s,
+                            self.efficiency_min_pressure_pa)
         return TableTorque(theoretical, comps, friction, tin, eff, flags)
 
     def magnitudes_array(self, speed_abs_rad_s, pressure_abs_pa, viscosity_m2_s,
