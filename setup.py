@@ -21,13 +21,16 @@ setup(
         'numpy>=1.24',
         'scipy>=1.10',
         'PyYAML>=6.0',
-        'matplotlib>=3.7',
+        'matplotlib>=3.6',
         'rosbags>=0.10',
+        'ruamel.yaml>=0.17.21',
     ],
     extras_require={
         # pytest is bounded below 9: with a ROS 2 Jazzy install sourced, the
         # launch_testing / launch_ros pytest plugins make pytest 9 fail to start.
-        'test': ['pytest>=7,<9', 'ruff>=0.5', 'dask[distributed]>=2024.1'],
+        # mypy: test_types.py; 1.12 is the oldest release the package checks clean with.
+        'test': ['pytest>=7,<9', 'ruff>=0.5', 'dask[distributed]>=2024.1', 'hypothesis>=6',
+                 'mypy>=1.12', 'types-PyYAML>=6.0'],
         'fleet': ['dask[distributed]>=2024.1'],
     },
     zip_safe=True,
@@ -40,6 +43,7 @@ setup(
         'console_scripts': [
             'pump_friction = pump_friction_ros.cli:main',
             'torque_estimator = pump_friction_ros.node:main',
+            'measure_node_cpu = pump_friction_ros.measure_cpu:main',
         ],
     },
 )

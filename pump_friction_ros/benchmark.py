@@ -1,4 +1,5 @@
-"""Benchmarks, run as ``python -m pump_friction_ros.benchmark [SECTION ...]``.
+"""
+Benchmarks, run as ``python -m pump_friction_ros.benchmark [SECTION ...]``.
 
 Each figure is printed with a baseline measured in the same run on the same machine, and
 the ratio between them, so numbers from different machines can be compared. Timings are
@@ -8,8 +9,8 @@ the best of several repeats (the least disturbed by other load).
 from __future__ import annotations
 
 import argparse
-import time
 from collections.abc import Callable
+import time
 
 import numpy as np
 
@@ -21,7 +22,8 @@ __all__ = ['best_time_s', 'main']
 
 
 def best_time_s(func: Callable[[], object], repeat: int = 5, number: int = 1) -> float:
-    """Best wall time of ``number`` calls, over ``repeat`` repeats, per call.
+    """
+    Best wall time of ``number`` calls, over ``repeat`` repeats, per call.
 
     Parameters
     ----------
@@ -36,6 +38,7 @@ def best_time_s(func: Callable[[], object], repeat: int = 5, number: int = 1) ->
     -------
     float
         Seconds per call [s].
+
     """
     best = float('inf')
     for _ in range(repeat):
@@ -112,7 +115,8 @@ def bench_table() -> None:
     n = 1_000_000
     pts = np.column_stack([rng.uniform(0.0, table.speed_axis_rad_s[-1], n),
                            rng.uniform(0.0, table.pressure_axis_pa[-1], n),
-                           rng.uniform(*table.viscosity_axis_m2_s[[0, -1]], n)])
+                           rng.uniform(table.viscosity_axis_m2_s[0],
+                                       table.viscosity_axis_m2_s[-1], n)])
     t_rgi_v = best_time_s(lambda: rgi(pts), repeat=2)
     t_vec = best_time_s(lambda: table.magnitudes_array(pts[:, 0], pts[:, 1], pts[:, 2]),
                         repeat=3)
@@ -166,22 +170,23 @@ def bench_estimator() -> None:
 
 def bench_replay() -> None:
     """Replay of the wear sample bag against rosbags' own read-and-deserialise loop."""
+    from pathlib import Path
     import shutil
     import tempfile
-    from pathlib import Path
 
     from rosbags.highlevel import AnyReader
 
+    from .bags.replay import replay_bag
     from .config import load_estimator_config
     from .estimator import estimator_from_config
     from .params import config_dir
-    from .replay import replay_bag
 
     bag = config_dir().parent / 'bags' / 'eha_valve_plate_wear'
     if not bag.exists():
         print(f'replay: sample bag not found at {bag}; skipped')
         return
-    config = load_estimator_config(config_dir() / 'torque_estimator.yaml')
+    config = load_estimator_config([config_dir() / 'torque_estimator.yaml',
+                                    bag.parent / 'eha_params.yaml'])  # the bags' pump
     estimator_from_config(config)  # warm the table cache outside the timings
 
     def rosbags_loop() -> None:
@@ -218,7 +223,8 @@ SECTIONS: dict[str, Callable[[], None]] = {'model': bench_model, 'table': bench_
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the benchmarks.
+    """
+    Run the benchmarks.
 
     Parameters
     ----------
@@ -229,6 +235,7 @@ def main(argv: list[str] | None = None) -> int:
     -------
     int
         Exit code 0.
+
     """
     parser = argparse.ArgumentParser(prog='python -m pump_friction_ros.benchmark',
                                      description=__doc__.splitlines()[0])

@@ -3,25 +3,30 @@
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable, Sequence
 import json
 import math
 import os
-import sys
-from collections.abc import Callable, Sequence
 from pathlib import Path
+import sys
+from typing import Any, NoReturn, TYPE_CHECKING
 
 import numpy as np
 
-from .errors import PumpFrictionError
+from . import cli_data
+from .errors import PumpFrictionError, UsageError
 from .model import COMPONENTS, PumpModel
 from .params import load_pump
 from .units import (
-    CC_TO_M3,
-    MM_TO_M,
     bar_to_pa,
+    CC_TO_M3,
     cst_to_m2_s,
+    MM_TO_M,
     rpm_to_rad_s,
 )
+
+if TYPE_CHECKING:
+    from .table import FrictionTable
 
 __all__ = ['main']
 
@@ -30,14 +35,20 @@ MAX_PRESSURE_BAR = 2_000.0
 MAX_VISCOSITY_CST = 10_000.0
 
 
-class UsageError(PumpFrictionError):
-    """A bad command-line argument."""
-
-
 class _Parser(argparse.ArgumentParser):
-    """Argument parser that reports a bad argument in one line and exits with code 2."""
+    """
+    Argument parser that reports a bad argument in one line and exits with code 2.
 
-    def error(self, message: str) -> None:
+    Abbreviations are off (``allow_abbrev=False``) for the main parser and every
+    sub-command, so that a typo such as ``--plot`` for ``--plots`` is an error instead of
+    a guess.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs['allow_abbrev'] = False
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
         """Raise `UsageError` instead of printing usage and exiting."""
         raise UsageError(f'{message} (see {self.prog} --help)')
 
@@ -53,6 +64,19 @@ def _bounded_float(name: str, low: float, high: float) -> Callable[[str], float]
         if not low <= value <= high:
             raise argparse.ArgumentTypeError(f'{name} must be in [{low:g}, {high:g}], '
                                              f'got {value:g}')
+        return value
+
+    return parse
+
+
+def _bounded_int(name: str, low: int, high: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'{name} must be an integer, got {text!r}') from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f'{name} must be in [{low}, {high}], got {value}')
         return value
 
     return parse
@@ -96,7 +120,8 @@ def _cmd_paper_check(args: argparse.Namespace) -> int:
 
 def torque_record(model: PumpModel, speed_rad_s: float, pressure_pa: float,
                   viscosity_m2_s: float) -> dict[str, float | None]:
-    """Revolution-mean torques of one operating point, keyed as in ``torque --json``.
+    """
+    Revolution-mean torques of one operating point, keyed as in ``torque --json``.
 
     Parameters
     ----------
@@ -113,6 +138,7 @@ def torque_record(model: PumpModel, speed_rad_s: float, pressure_pa: float,
     -------
     dict
         Signed torques [N*m] and efficiency [-] (None when undefined).
+
     """
     res = model.evaluate(speed_rad_s, pressure_pa, viscosity_m2_s)
     record = {'theoretical_nm': res.theoretical_nm[0]}
@@ -132,9 +158,10 @@ def _print_record(record: dict[str, float | None], header: str, as_json: bool) -
         print(f'  {key:<24} {shown}')
 
 
-def table_record(table, speed_rad_s: float, pressure_pa: float,
+def table_record(table: FrictionTable, speed_rad_s: float, pressure_pa: float,
                  viscosity_m2_s: float) -> tuple[dict[str, float | None], int]:
-    """Torques of one operating point from a friction table, keyed as `torque_record`.
+    """
+    Torques of one operating point from a friction table, keyed as `torque_record`.
 
     Parameters
     ----------
@@ -151,6 +178,7 @@ def table_record(table, speed_rad_s: float, pressure_pa: float,
     -------
     tuple
         The record (signed torques [N*m], efficiency [-] or None) and the lookup flags.
+
     """
     res = table.lookup(speed_rad_s, pressure_pa, viscosity_m2_s)
     record = {'theoretical_nm': res.theoretical_nm}
@@ -165,36 +193,54 @@ def _cmd_torque(args: argparse.Namespace) -> int:
     viscosity = (params.oil.viscosity_m2_s if args.viscosity_cst is None
                  else cst_to_m2_s(args.viscosity_cst))
     if args.table:
-        from .table import describe_flags, load_table
+        from .paths import resolve_path
+        from .table import describe_flags
+        from .table_io import load_table
 
-        record, flags = table_record(load_table(args.table, params), speed, pressure, viscosity)
+        table_path = resolve_path(args.table, '--table', must_exist=False)
+        record, flags = table_record(load_table(table_path, params), speed, pressure,
+                                     viscosity)
         if flags:
-            print(f'pump_friction: warning: {describe_flags(flags)}: clamped to the table\'s '
+            print(f"pump_friction: warning: {describe_flags(flags)}: clamped to the table's "
                   'edge', file=sys.stderr)
         source = f'table {args.table}'
     else:
         record = torque_record(PumpModel(params), speed, pressure, viscosity)
         source = 'full model'
+    broken = [key for key, value in record.items() if value is None and key != 'efficiency']
+    if broken:  # validation keeps pump files physical; never print a torque as undefined
+        raise PumpFrictionError(f'{params.name}: the model gives no finite {", ".join(broken)}'
+                                " at this operating point; check the pump file's values")
     _print_record(record, f'{params.name}: {args.speed_rpm:g} rpm, {args.pressure_bar:g} bar, '
                   f'{source} (torques in N*m, signed)', args.json)
     return 0
 
 
 def _cmd_build_table(args: argparse.Namespace) -> int:
-    from . import MODEL_VERSION
     from .progress import ProgressBar
-    from .table import TableSpec, build_table, cache_dir
+    from .staging import StagedOutputs
+    from .table import build_table, TableSpec
+    from .table_io import cached_table_path
 
     params = load_pump(args.pump)
     spec = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
                      max_pressure_pa=bar_to_pa(args.max_pressure_bar),
                      min_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[0]),
                      max_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[1]))
-    out = Path(args.out) if args.out else (
-        cache_dir() / f'{params.name}-{params.sha256[:16]}-m{MODEL_VERSION}.npz')
-    with ProgressBar('building table', enabled=not args.quiet) as bar:
-        table = build_table(params, spec, progress=bar)
-    table.save(out)
+    outputs = StagedOutputs()
+    try:
+        if args.out:  # checked and made before the build; moved into place at the end
+            staged = outputs.add(args.out, args.force, False)
+            out, path = staged.target, staged.path
+        else:  # the cache is rebuilt in place (it is a cache; saved atomically)
+            out = path = cached_table_path(params)
+        with ProgressBar('building table', enabled=not args.quiet) as bar:
+            table = build_table(params, spec, progress=bar)
+        table.save(path)
+        outputs.commit()
+    except BaseException:
+        outputs.discard()
+        raise
     shape = 'x'.join(str(n) for n in table.torque_nm.shape[:-1])
     print(f'{out}: {shape} grid (mode x speed x pressure x viscosity), '
           f'{table.metadata["build_seconds"]:.2f} s, pump {params.name} '
@@ -231,93 +277,33 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_replay(args: argparse.Namespace) -> int:
-    from .bags import parse_remaps
-    from .config import load_estimator_config
-    from .params import config_dir
-    from .replay import ReplayJob, discover_bags, fleet_table, run_jobs
-
-    config = load_estimator_config(args.params or config_dir() / 'torque_estimator.yaml')
-    remaps = tuple(parse_remaps(args.topic_remap).items())
-    bags = discover_bags(args.bags)
-    single = len(bags) == 1
-    if args.workers < 1:
-        raise UsageError('--workers must be >= 1')
-
-    def target(base: str | None, bag: Path, suffix: str) -> str | None:
-        if base is None:
-            return None
-        return base if single else str(Path(base) / f'{bag.name}{suffix}')
-
-    jobs = [ReplayJob(bag=str(bag), config=config, out_bag=target(args.out, bag, ''),
-                      csv_path=target(args.csv, bag, '.csv'),
-                      plots_dir=target(args.plots, bag, ''), remaps=remaps,
-                      storage=args.storage, force=args.force,
-                      progress=single and not args.quiet and not args.dask)
-            for bag in bags]
-    summaries = run_jobs(jobs, workers=args.workers, dask_address=args.dask)
-    if single:
-        summary = summaries[0]
-        if summary.error:
-            raise PumpFrictionError(summary.error)
-        print(summary.format())
-        return 0
-    for summary in summaries:
-        print(summary.format().splitlines()[0] if summary.error else
-              f'{summary.bag}: {summary.duration_s:.1f} s, {summary.estimates} estimates, '
-              f'alarm {summary.alarm_s:.1f} s, max valve-plate scale '
-              f'{summary.max_valve_plate_scale:.3f}')
-    print()
-    print(fleet_table(summaries))
-    return 2 if any(s.error for s in summaries) else 0
-
-
-def _cmd_make_sample_bags(args: argparse.Namespace) -> int:
-    from .samples import make_sample_bags
-
-    for path in make_sample_bags(args.out, seed=args.seed, pump_file=args.pump,
-                                 duration_s=args.duration_s):
-        print(path)
-    return 0
-
-
-def _cmd_calibrate(args: argparse.Namespace) -> int:
-    from .bags import parse_remaps
-    from .calibrate import calibrate
-    from .config import load_estimator_config
-    from .params import config_dir
-
-    config = load_estimator_config(args.params or config_dir() / 'torque_estimator.yaml')
-    result = calibrate(args.inputs, args.pump, args.out, report_dir=args.report, fix=args.fix,
-                       config=config, remaps=parse_remaps(args.topic_remap),
-                       steady_only=not args.whole_record, force=args.force)
-    print(result.format())
-    return 0
-
-
 def _add_pump(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--pump', metavar='FILE', default=None,
-                        help='pump parameter YAML (default: config/pumps/hong_doh_2004.yaml)')
+                        help='pump parameter YAML, package://pump_friction_ros/... path or '
+                        'shipped set name, e.g. hong_doh_2004_consistent (default: '
+                        'hong_doh_2004)')
 
 
 def _add_viscosity(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('--viscosity-cst', type=_viscosity, default=None, metavar='CST',
-                        help='oil kinematic viscosity [cSt] (default: the pump file\'s)')
+                        help="oil kinematic viscosity [cSt] (default: the pump file's)")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """Build the ``pump_friction`` argument parser.
+    """
+    Build the ``pump_friction`` argument parser.
 
     Returns
     -------
     argparse.ArgumentParser
         Parser with one sub-command per job.
+
     """
     parser = _Parser(prog='pump_friction',
                      description='Bent-axis pump friction model (Hong & Doh 2004).')
     sub = parser.add_subparsers(dest='command', required=True, parser_class=_Parser)
 
-    p = sub.add_parser('paper-check', help='the paper\'s numbers next to the model\'s')
+    p = sub.add_parser('paper-check', help="the paper's numbers next to the model's")
     _add_pump(p)
     p.add_argument('--json', action='store_true', help='machine-readable output')
     p.set_defaults(func=_cmd_paper_check)
@@ -346,6 +332,7 @@ def build_parser() -> argparse.ArgumentParser:
                    metavar='P', help='pressure-difference envelope [bar] (default 350)')
     p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=[10.0, 100.0],
                    metavar=('LOW', 'HIGH'), help='viscosity range [cSt] (default 10 100)')
+    p.add_argument('--force', action='store_true', help='replace an existing --out file')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_cmd_build_table)
 
@@ -359,28 +346,32 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--json', action='store_true', help='machine-readable output')
     p.set_defaults(func=_cmd_kinematics)
 
-    p = sub.add_parser('replay', help='the node\'s outputs from rosbag2 bags')
+    p = sub.add_parser('replay', help="the node's outputs from rosbag2 bags")
     p.add_argument('bags', nargs='+', metavar='BAG',
                    help='bag directories (sqlite3 or mcap), or folders holding bags')
-    p.add_argument('--params', metavar='FILE', default=None,
-                   help='node parameters file (default: the package\'s '
-                   'config/torque_estimator.yaml, as the launch file uses)')
+    p.add_argument('--params', metavar='FILE', action='append', default=None,
+                   help='node parameters file; may be given several times, later files '
+                   "overriding earlier ones (default: the node's declared defaults, which "
+                   'config/torque_estimator.yaml repeats)')
     p.add_argument('--out', metavar='OUT_BAG', default=None,
                    help='output bag (several bags: a folder, one bag each)')
     p.add_argument('--csv', metavar='FILE', default=None,
                    help='CSV, one row per estimate (several bags: a folder)')
     p.add_argument('--plots', metavar='DIR', default=None, help='folder for PNG plots')
     p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW',
-                   help='the node\'s topic OLD is NEW in the bag')
+                   help="the node's topic OLD is NEW in the bag")
     p.add_argument('--storage', choices=('sqlite3', 'mcap'), default=None,
-                   help='output bag storage (default: the input\'s)')
+                   help="output bag storage (default: the input's)")
+    p.add_argument('--compression', choices=('auto', 'none', 'zstd'), default='auto',
+                   help='output bag zstd compression: auto follows the input (default), zstd '
+                   'is chunks for mcap and file compression for sqlite3')
     p.add_argument('--force', action='store_true', help='replace existing outputs')
     p.add_argument('--workers', type=int, default=os.cpu_count() or 1, metavar='N',
                    help='parallel local processes for several bags (default: CPU count)')
     p.add_argument('--dask', metavar='ADDRESS', default=None,
                    help='run the bags on this Dask scheduler (extra [fleet])')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
-    p.set_defaults(func=_cmd_replay)
+    p.set_defaults(func=cli_data.cmd_replay)
 
     p = sub.add_parser('make-sample-bags', help='write the simulated sample bags')
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')
@@ -388,7 +379,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--duration-s', type=_bounded_float('--duration-s', 1.0, 86400.0),
                    default=75.0, metavar='S', help='length of each bag [s] (default 75)')
     _add_pump(p)
-    p.set_defaults(func=_cmd_make_sample_bags)
+    p.set_defaults(func=cli_data.cmd_make_sample_bags)
 
     p = sub.add_parser('calibrate', help='fit the open friction parameters to data')
     p.add_argument('inputs', nargs='+', metavar='INPUT',
@@ -399,16 +390,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--report', metavar='DIR', default=None, help='report.json and PNG plots')
     p.add_argument('--fix', nargs='+', default=[], metavar='NAME',
                    help='hold these at their base values (see README)')
-    p.add_argument('--params', metavar='FILE', default=None,
+    p.add_argument('--params', metavar='FILE', action='append', default=None,
                    help='node parameters (bags: topics, filter; oil; inertia and drive loss '
-                   'start values)')
+                   'start values); may be given several times, later files overriding')
     p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW')
     p.add_argument('--whole-record', action='store_true',
                    help='bags: fit friction on every sample, not only near-steady ones')
     p.add_argument('--force', action='store_true', help='replace an existing output file')
-    p.set_defaults(func=_cmd_calibrate)
+    p.set_defaults(func=cli_data.cmd_calibrate)
 
-    p = sub.add_parser('plot', help='PNG figures in the manner of the paper\'s')
+    p = sub.add_parser('evaluate-monitor', help='scenario bank: false alarms, detection '
+                       'delay, attribution and coverage of the wear monitor')
+    p.add_argument('--quick', action='store_true',
+                   help='the small bank of the test suite (default: the benchmark, >= 10 h '
+                   'of nominal running)')
+    p.add_argument('--workers', type=_bounded_int('--workers', 1, 1024),
+                   default=os.cpu_count() or 1, metavar='N',
+                   help='parallel processes (default: CPU count); same records for any N')
+    p.add_argument('--out', metavar='DIR', default=None,
+                   help='folder for records.csv, figures.json, table.md and PNG plots')
+    p.add_argument('--seed', type=int, default=0, metavar='N', help='bank seed (default 0)')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=cli_data.cmd_evaluate_monitor)
+
+    p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')
     _add_pump(p)
     p.set_defaults(func=_cmd_plot)
@@ -416,7 +421,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``pump_friction`` command line.
+    """
+    Run the ``pump_friction`` command line.
 
     Parameters
     ----------
@@ -426,17 +432,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit code: 0 on success, 2 on a bad argument or input file.
+        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C.
+
     """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
         return args.func(args)
     except PumpFrictionError as exc:
-        print(f'pump_friction: error: {exc}', file=sys.stderr)
-        return 2
+        return _fail(str(exc))
     except BrokenPipeError:  # e.g. piped into head
         return 0
+    except KeyboardInterrupt:  # every output is staged: discarded on the way up
+        print('pump_friction: interrupted', file=sys.stderr)
+        return 130
+    except OSError as exc:  # the environment (disk full, permissions) rather than the input
+        where = f': {exc.filename}' if exc.filename else ''
+        return _fail(f'{exc.strerror or type(exc).__name__}{where}')
+
+
+def _fail(message: str) -> int:
+    """Print one error line on stderr and return exit code 2."""
+    print(f'pump_friction: error: {" ".join(message.split())}', file=sys.stderr)
+    return 2
 
 
 if __name__ == '__main__':

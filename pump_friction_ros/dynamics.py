@@ -1,4 +1,5 @@
-"""Piston dynamics, Hong & Doh (2004) eqs. (3)-(8), and the work-energy friction torques.
+"""
+Piston dynamics, Hong & Doh (2004) eqs. (3)-(8), and the work-energy friction torques.
 
 For each piston, operating point and phase angle the reaction on the head, F_A (in the
 plane normal to the bore, eq. 4-5 notation), and on the spherical joint, F_B, follow from
@@ -54,7 +55,8 @@ class PistonLoads:
 
 
 def joint_angular_velocity_per_speed(params: PumpParams, kin: PistonKinematics) -> np.ndarray:
-    """Angular velocity of the sliding in the spherical joint, per unit shaft speed.
+    """
+    Angular velocity of the sliding in the spherical joint, per unit shaft speed.
 
     ``barrel`` (the paper's reading, sec. 2: 50 rad/s and 0.275 m/s at 10,000 rpm): the
     piston's angular velocity relative to the barrel. ``flange``: relative to the drive
@@ -72,6 +74,7 @@ def joint_angular_velocity_per_speed(params: PumpParams, kin: PistonKinematics) 
     -------
     ndarray, shape (n, 3)
         Joint angular velocity per unit shaft speed [rad/rad].
+
     """
     if params.piston_friction.joint_sliding_frame == 'flange':
         return kin.omega_abs_per_speed - kin.flange_axis
@@ -96,7 +99,8 @@ def _inertial_moment_per_speed2(params: PumpParams, kin: PistonKinematics) -> np
 
 def solve_piston_loads(params: PumpParams, kin: PistonKinematics, speed_rad_s: np.ndarray,
                        chamber_pressure_pa: np.ndarray, iterations: int = 6) -> PistonLoads:
-    """Reaction and friction loads of one piston, eqs. (3)-(8).
+    """
+    Reaction and friction loads of one piston, eqs. (3)-(8).
 
     Parameters
     ----------
@@ -115,6 +119,7 @@ def solve_piston_loads(params: PumpParams, kin: PistonKinematics, speed_rad_s: n
     -------
     PistonLoads
         Loads and per-piston friction torques.
+
     """
     geom, pis, fr = params.geometry, params.piston, params.piston_friction
     omega = np.asarray(speed_rad_s, dtype=float)[:, None]  # (m, 1)

@@ -1,6 +1,9 @@
 """Exceptions raised by pump_friction_ros; every one carries a message fit for a user."""
 
-__all__ = ['ConfigError', 'PumpFrictionError', 'TableError']
+from typing import Any
+
+__all__ = ['BagError', 'CalibrationError', 'ConfigError', 'OutputError', 'PumpFrictionError',
+           'TableError', 'UsageError', 'quote']
 
 
 class PumpFrictionError(Exception):
@@ -13,3 +16,51 @@ class ConfigError(PumpFrictionError, ValueError):
 
 class TableError(PumpFrictionError, ValueError):
     """A friction-torque table file is malformed or does not match the pump in use."""
+
+
+class BagError(PumpFrictionError):
+    """A bag is missing, not a bag, unreadable, corrupt, empty or lacks the input topics."""
+
+
+class OutputError(PumpFrictionError):
+    """An output exists (without --force), is of another kind, or cannot be written."""
+
+
+class CalibrationError(PumpFrictionError):
+    """Unusable calibration input: no samples, NaN, inconsistent units, too few points."""
+
+
+class UsageError(PumpFrictionError):
+    """A bad command-line argument."""
+
+
+def quote(value: Any, limit: int = 60) -> str:
+    """
+    Return ``repr(value)`` cut to ``limit`` characters, for error messages.
+
+    A value from a file can be huge (a YAML alias bomb expands to gigabytes when printed):
+    an error message names a container by its type and length and quotes only the start of
+    anything else, so that reporting it cannot hang.
+
+    Parameters
+    ----------
+    value : object
+        The offending value.
+    limit : int
+        Most characters quoted.
+
+    Returns
+    -------
+    str
+        The quotation, at most ``limit`` + 5 characters.
+
+    """
+    if isinstance(value, (dict, list, tuple, set)):
+        return f'a {type(value).__name__} of {len(value)} item(s)'
+    if isinstance(value, str) and len(value) > limit:
+        return repr(value[:limit]) + '...'
+    try:
+        text = repr(value)
+    except ValueError:  # an integer too long to print (Python's digit limit)
+        return 'an integer too long to print'
+    return text if len(text) <= limit + 2 else text[:limit] + '...'

@@ -1,4 +1,5 @@
-"""Friction laws of the valve plate (eq. 9) and the shaft bearing (eq. 10), Hong & Doh (2004).
+"""
+Friction laws of the valve plate (eq. 9) and the shaft bearing (eq. 10), Hong & Doh (2004).
 
 The spherical-joint and piston-head friction come from the piston dynamics
 (``dynamics``, eqs. 3-8, work-energy method).
@@ -19,6 +20,7 @@ __all__ = [
     'bearing_torque_nm',
     'couette_land_integral_m4',
     'smooth_sign',
+    'smooth_sign_scalar',
     'valve_plate_coulomb_torque_nm',
     'valve_plate_viscous_torque_nm',
 ]
@@ -28,7 +30,8 @@ PALMGREN_THRESHOLD_CST_RPM = 2000.0
 
 
 def smooth_sign(speed_rad_s: np.ndarray, threshold_rad_s: float) -> np.ndarray:
-    """Direction factor of a friction torque: tanh(speed / threshold).
+    """
+    Direction factor of a friction torque: tanh(speed / threshold).
 
     Friction opposes the shaft's motion. Instead of a sign step at zero speed (which would
     make the input torque jump and a table-based estimator chatter on reversals) the
@@ -46,12 +49,34 @@ def smooth_sign(speed_rad_s: np.ndarray, threshold_rad_s: float) -> np.ndarray:
     -------
     ndarray
         Factor in (-1, 1) [-].
+
     """
     return np.tanh(np.asarray(speed_rad_s, dtype=float) / threshold_rad_s)
 
 
+def smooth_sign_scalar(speed_rad_s: float, threshold_rad_s: float) -> float:
+    """
+    Return `smooth_sign` of one speed, without numpy (the estimator's per-sample path).
+
+    Parameters
+    ----------
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    threshold_rad_s : float
+        Speed scale of the transition [rad/s].
+
+    Returns
+    -------
+    float
+        tanh(speed / threshold) [-].
+
+    """
+    return math.tanh(speed_rad_s / threshold_rad_s)
+
+
 def barrel_effective_area_m2(geom: Geometry, vp: ValvePlate) -> float:
-    """Net area A_b pressing the barrel on the valve plate per chamber, eq. (9).
+    """
+    Net area A_b pressing the barrel on the valve plate per chamber, eq. (9).
 
     A_b = A_p - pi/(2N) [(R_o^2 - r_o^2)/ln(R_o/r_o) - (R_i^2 - r_i^2)/ln(R_i/r_i)]: the
     piston area minus the lift of the radial pressure field under the lands.
@@ -67,6 +92,7 @@ def barrel_effective_area_m2(geom: Geometry, vp: ValvePlate) -> float:
     -------
     float
         A_b [m^2].
+
     """
     r_in, p_in = vp.land_inner_radius_m, vp.port_inner_radius_m
     p_out, r_out = vp.port_outer_radius_m, vp.land_outer_radius_m
@@ -77,7 +103,8 @@ def barrel_effective_area_m2(geom: Geometry, vp: ValvePlate) -> float:
 
 def valve_plate_coulomb_torque_nm(normal_force_n: np.ndarray, speed_abs_rad_s: np.ndarray,
                                   vp: ValvePlate) -> np.ndarray:
-    """Coulomb part of eq. (9): T = [sum_i A_b p_ci] mu_c(|omega|) R_c.
+    """
+    Coulomb part of eq. (9): T = [sum_i A_b p_ci] mu_c(|omega|) R_c.
 
     Parameters
     ----------
@@ -92,12 +119,14 @@ def valve_plate_coulomb_torque_nm(normal_force_n: np.ndarray, speed_abs_rad_s: n
     -------
     ndarray
         Torque magnitude [N*m].
+
     """
     return normal_force_n * vp.coulomb_coefficient(speed_abs_rad_s) * vp.friction_radius_m
 
 
 def couette_land_integral_m4(vp: ValvePlate) -> float:
-    """Integral of r^3 dr dphi over the valve-plate lands (annulus minus two kidneys).
+    """
+    Integral of r^3 dr dphi over the valve-plate lands (annulus minus two kidneys).
 
     Parameters
     ----------
@@ -108,6 +137,7 @@ def couette_land_integral_m4(vp: ValvePlate) -> float:
     -------
     float
         Integral [m^4].
+
     """
     annulus = 0.5 * math.pi * (vp.land_outer_radius_m**4 - vp.land_inner_radius_m**4)
     kidney_angle = math.pi - vp.bridge_angle_rad
@@ -117,7 +147,8 @@ def couette_land_integral_m4(vp: ValvePlate) -> float:
 
 def valve_plate_viscous_torque_nm(speed_abs_rad_s: np.ndarray, viscosity_m2_s: np.ndarray,
                                   density_kg_m3: float, vp: ValvePlate) -> np.ndarray:
-    """Viscous part of the valve-plate friction: Couette shear of the film, sec. 4.2.
+    """
+    Viscous part of the valve-plate friction: Couette shear of the film, sec. 4.2.
 
     The paper treats barrel and plate as circular rings with a constant clearance h and
     radial flow; shear stress rho nu omega r / h integrated over the lands gives
@@ -140,16 +171,18 @@ def valve_plate_viscous_torque_nm(speed_abs_rad_s: np.ndarray, viscosity_m2_s: n
     -------
     ndarray
         Torque magnitude [N*m].
+
     """
     dynamic_viscosity = density_kg_m3 * np.asarray(viscosity_m2_s, dtype=float)
     return (dynamic_viscosity * speed_abs_rad_s / vp.film_clearance_m
             * couette_land_integral_m4(vp))
 
 
-def bearing_torque_nm(load_n: np.ndarray, speed_abs_rad_s: np.ndarray,
+def bearing_torque_nm(load_n: np.ndarray | float, speed_abs_rad_s: np.ndarray,
                       viscosity_m2_s: np.ndarray, bearing: Bearing) -> tuple[np.ndarray,
-                                                                              np.ndarray]:
-    """Shaft-bearing friction by Palmgren, eq. (10): T = T_m + T_v.
+                                                                             np.ndarray]:
+    """
+    Shaft-bearing friction by Palmgren, eq. (10): T = T_m + T_v.
 
     T_m = f1 F_L^a d_m^b and T_v = 1e-7 f0 (nu n)^(2/3) d_m^3 when nu n >= 2000, else
     160e-7 f0 d_m^3; the formula is empirical in N*mm with F_L in N, d_m in mm, nu in cSt
@@ -157,7 +190,7 @@ def bearing_torque_nm(load_n: np.ndarray, speed_abs_rad_s: np.ndarray,
 
     Parameters
     ----------
-    load_n : ndarray
+    load_n : float or ndarray
         Bearing load F_L [N].
     speed_abs_rad_s : ndarray
         |shaft speed| [rad/s].
@@ -170,6 +203,7 @@ def bearing_torque_nm(load_n: np.ndarray, speed_abs_rad_s: np.ndarray,
     -------
     tuple of ndarray
         Mechanical (load) torque T_m and viscous torque T_v, magnitudes [N*m].
+
     """
     d_m_mm = bearing.mean_diameter_m / MM_TO_M
     mechanical = bearing.f1 * np.power(load_n, bearing.a) * d_m_mm**bearing.b * NMM_TO_NM

@@ -1,4 +1,5 @@
-"""Piston kinematics of the bent-axis pump: Hong & Doh (2004) eqs. (1), (2) and derivatives.
+"""
+Piston kinematics of the bent-axis pump: Hong & Doh (2004) eqs. (1), (2) and derivatives.
 
 Frames and conventions
 ----------------------
@@ -26,7 +27,8 @@ __all__ = ['PistonKinematics', 'head_position', 'joint_position', 'piston_kinema
 
 
 def joint_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Spherical-joint centre B in the bore frame and its phi-derivatives (Fig. 2(a)).
+    """
+    Spherical-joint centre B in the bore frame and its phi-derivatives (Fig. 2(a)).
 
     The joint turns with the flange on a circle of radius R_S about Z; seen from the bore
     frame it is ``R_S (cos^2 phi cos d + sin^2 phi, sin phi cos phi (1 - cos d),
@@ -43,6 +45,7 @@ def joint_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndar
     -------
     tuple of ndarray, each shape (n, 3)
         B [m], dB/dphi [m/rad], d2B/dphi2 [m/rad^2].
+
     """
     r_s = geom.joint_pitch_radius_m
     cd, sd = np.cos(geom.inclination_rad), np.sin(geom.inclination_rad)
@@ -55,7 +58,8 @@ def joint_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def head_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Position s of the piston-head centre A along its bore axis, and phi-derivatives.
+    """
+    Position s of the piston-head centre A along its bore axis, and phi-derivatives.
 
     A = (R_C, 0, s) in the bore frame and |A - B| = L (the rod length) give the closed form
     ``s = -R_S sin d cos phi + sqrt(Q0 + Q1 cos^2 phi)``, the exact solution of the
@@ -73,6 +77,7 @@ def head_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndarr
     -------
     tuple of ndarray, each shape (n,)
         s [m], ds/dphi [m/rad], d2s/dphi2 [m/rad^2].
+
     """
     r_s, r_c, rod = geom.joint_pitch_radius_m, geom.bore_pitch_radius_m, geom.rod_length_m
     cd, sd = np.cos(geom.inclination_rad), np.sin(geom.inclination_rad)
@@ -94,7 +99,8 @@ def head_position(geom: Geometry, phi: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 @dataclass(frozen=True)
 class PistonKinematics:
-    """Speed-free kinematics of one piston over its phase angle, in the bore frame.
+    """
+    Speed-free kinematics of one piston over its phase angle, in the bore frame.
 
     Multiply ``*_per_speed`` by omega [rad/s] and ``*_per_speed2`` by omega**2 to get the
     quantity at a constant shaft speed omega (either sign).
@@ -114,7 +120,8 @@ class PistonKinematics:
 
 
 def piston_kinematics(geom: Geometry, phi: np.ndarray, joint_to_cg_m: float) -> PistonKinematics:
-    """Piston kinematics from eqs. (1), (2) and (8), exact in phi.
+    """
+    Piston kinematics from eqs. (1), (2) and (8), exact in phi.
 
     Eq. (1) V_B = V_A + w x R_BA with eq. (2) w . R_BA = 0 give, with d = (A - B)/L,
     w = d x dd/dt (the angular velocity relative to the barrel) and V'_A = ds/dt along the
@@ -135,6 +142,7 @@ def piston_kinematics(geom: Geometry, phi: np.ndarray, joint_to_cg_m: float) -> 
     -------
     PistonKinematics
         Arrays over phi, scaled to unit shaft speed.
+
     """
     phi = np.asarray(phi, dtype=float)
     b, db, d2b = joint_position(geom, phi)

@@ -1,4 +1,5 @@
-"""The pump model: friction components, theoretical and input torque, torque efficiency.
+"""
+The pump model: friction components, theoretical and input torque, torque efficiency.
 
 Four quadrants
 --------------
@@ -17,10 +18,12 @@ Inputs are signed: shaft speed omega [rad/s] and pressure difference dp = p_A - 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
+from typing import Any, Literal, overload
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .dynamics import solve_piston_loads
 from .friction import (
@@ -38,7 +41,9 @@ __all__ = [
     'COMPONENTS',
     'PumpModel',
     'TorqueResult',
+    'TorqueResultWithWaveforms',
     'Waveforms',
+    'angle_count',
     'efficiency_of',
     'input_torque_nm',
     'theoretical_torque_nm',
@@ -49,52 +54,63 @@ COMPONENTS = ('valve_plate', 'bearing', 'spherical_joints', 'piston_heads')
 """Names of the friction components, in the order used by tables and messages."""
 
 
-def theoretical_torque_nm(displacement_m3: float, pressure_diff_pa: np.ndarray) -> np.ndarray:
-    """Theoretical (ideal) torque V_g dp / (2 pi), sec. 5.
+def theoretical_torque_nm(displacement_m3: float, pressure_diff_pa: Any) -> Any:
+    """
+    Theoretical (ideal) torque V_g dp / (2 pi), sec. 5.
+
+    Plain arithmetic: a float gives a float (the estimator's per-sample path), an array an
+    array.
 
     Parameters
     ----------
     displacement_m3 : float
         Displacement per revolution V_g [m^3].
-    pressure_diff_pa : ndarray
+    pressure_diff_pa : float or ndarray
         Pressure difference p_A - p_B [Pa].
 
     Returns
     -------
-    ndarray
+    float or ndarray
         Torque [N*m], with the sign of the pressure difference.
+
     """
-    return displacement_m3 * np.asarray(pressure_diff_pa, dtype=float) / (2.0 * math.pi)
+    return displacement_m3 / (2.0 * math.pi) * pressure_diff_pa
 
 
-def input_torque_nm(theoretical_nm: np.ndarray, friction_magnitude_nm: np.ndarray,
-                    speed_rad_s: np.ndarray, zero_speed_threshold_rad_s: float) -> np.ndarray:
-    """Shaft input torque: theoretical torque plus friction opposing the motion.
+def input_torque_nm(theoretical_nm: Any, friction_magnitude_nm: Any, direction: Any,
+                    drive_loss_nm: Any = 0.0) -> Any:
+    """
+    Shaft input torque: theoretical torque plus friction and drive loss opposing the motion.
+
+    T_in = T_th + d (T_f + L), with d = `friction.smooth_sign` of the speed: the one rule of
+    the signed torque, used by the model, the table, the estimator, the simulator and the
+    calibration. Plain arithmetic: floats or arrays alike.
 
     Parameters
     ----------
-    theoretical_nm : ndarray
+    theoretical_nm : float or ndarray
         Theoretical torque [N*m].
-    friction_magnitude_nm : ndarray
+    friction_magnitude_nm : float or ndarray
         Friction torque magnitude [N*m].
-    speed_rad_s : ndarray
-        Shaft speed [rad/s].
-    zero_speed_threshold_rad_s : float
-        Speed scale of the smooth direction change [rad/s].
+    direction : float or ndarray
+        Smooth sign of the speed, in (-1, 1) [-].
+    drive_loss_nm : float or ndarray
+        Constant drive loss magnitude (seals, gears) [N*m].
 
     Returns
     -------
-    ndarray
+    float or ndarray
         Input torque [N*m].
+
     """
-    return theoretical_nm + smooth_sign(speed_rad_s, zero_speed_threshold_rad_s) * \
-        friction_magnitude_nm
+    return theoretical_nm + direction * (friction_magnitude_nm + drive_loss_nm)
 
 
 def torque_efficiency(theoretical_nm: np.ndarray, input_nm: np.ndarray, speed_rad_s: np.ndarray,
                       pressure_diff_pa: np.ndarray, min_speed_rad_s: float,
                       min_pressure_pa: float) -> np.ndarray:
-    """Torque efficiency per mode; NaN where it means nothing.
+    """
+    Torque efficiency per mode; NaN where it means nothing.
 
     Parameters
     ----------
@@ -115,6 +131,7 @@ def torque_efficiency(theoretical_nm: np.ndarray, input_nm: np.ndarray, speed_ra
     -------
     ndarray
         Efficiency in [0, 1] [-], NaN where undefined.
+
     """
     th = np.asarray(theoretical_nm, dtype=float)
     tin = np.asarray(input_nm, dtype=float)
@@ -131,7 +148,8 @@ def torque_efficiency(theoretical_nm: np.ndarray, input_nm: np.ndarray, speed_ra
 def efficiency_of(theoretical_nm: float, shaft_nm: float, speed_rad_s: float,
                   pressure_diff_pa: float, min_speed_rad_s: float,
                   min_pressure_pa: float) -> float:
-    """Scalar twin of `torque_efficiency` (pure Python, for the per-sample paths).
+    """
+    Scalar twin of `torque_efficiency` (pure Python, for the per-sample paths).
 
     Parameters
     ----------
@@ -152,6 +170,7 @@ def efficiency_of(theoretical_nm: float, shaft_nm: float, speed_rad_s: float,
     -------
     float
         Efficiency [-] per mode, NaN where undefined.
+
     """
     if abs(speed_rad_s) < min_speed_rad_s or abs(pressure_diff_pa) < min_pressure_pa \
             or shaft_nm == 0.0 or theoretical_nm == 0.0:
@@ -208,7 +227,7 @@ class TorqueResult:
     @property
     def friction_magnitude_nm(self) -> np.ndarray:
         """Total friction torque magnitude [N*m]."""
-        return sum(self.magnitudes_nm[c] for c in COMPONENTS)
+        return np.asarray(sum(self.magnitudes_nm[c] for c in COMPONENTS))
 
     @property
     def friction_nm(self) -> np.ndarray:
@@ -218,23 +237,64 @@ class TorqueResult:
     @property
     def input_nm(self) -> np.ndarray:
         """Shaft input torque [N*m]."""
-        return self.theoretical_nm + self.friction_nm
+        return input_torque_nm(self.theoretical_nm, self.friction_magnitude_nm, self.direction)
+
+
+@dataclass(frozen=True)
+class TorqueResultWithWaveforms(TorqueResult):
+    """The `TorqueResult` of `PumpModel.evaluate` with ``waveforms=True``: waveforms set."""
+
+    waveforms: Waveforms
+
+
+MIN_ANGLES = 360
+"""Shaft angles per revolution at least (1 deg): the revolution means converge to 2e-3."""
+
+
+def angle_count(n_pistons: int, minimum: int = MIN_ANGLES) -> int:
+    """
+    Return the number of shaft angles for a pump: a multiple of its piston count.
+
+    The pistons are 2 pi / N apart, so the angle grid must hold a multiple of N samples for
+    their phase shifts to fall on samples; at least ``minimum`` and 4 per piston pitch.
+
+    Parameters
+    ----------
+    n_pistons : int
+        Number of pistons N (>= 1).
+    minimum : int
+        Fewest samples wanted.
+
+    Returns
+    -------
+    int
+        The smallest multiple of N that is >= ``minimum`` and >= 4 N (360 for 5 or 9
+        pistons, 364 for 7).
+
+    """
+    need = max(minimum, 4 * n_pistons)
+    return -(-need // n_pistons) * n_pistons
 
 
 class PumpModel:
-    """Hong & Doh (2004) friction model of one pump, vectorised over operating points.
+    """
+    Hong & Doh (2004) friction model of one pump, vectorised over operating points.
 
     Parameters
     ----------
     params : PumpParams
         Validated pump parameters.
-    n_angles : int
+    n_angles : int, optional
         Samples of the shaft angle over one revolution; a multiple of the number of
-        pistons so that the pistons' phase shifts fall on samples.
+        pistons so that the pistons' phase shifts fall on samples. Default: `angle_count`
+        of the pump's piston count (any piston count works).
+
     """
 
-    def __init__(self, params: PumpParams, n_angles: int = 360) -> None:
+    def __init__(self, params: PumpParams, n_angles: int | None = None) -> None:
         n_pistons = params.geometry.n_pistons
+        if n_angles is None:
+            n_angles = angle_count(n_pistons)
         if n_angles < 4 * n_pistons or n_angles % n_pistons:
             raise ValueError(f'n_angles must be a multiple of {n_pistons} and >= '
                              f'{4 * n_pistons}, got {n_angles}')
@@ -251,7 +311,8 @@ class PumpModel:
         return self.params.geometry.displacement_m3
 
     def sum_pistons(self, per_piston: np.ndarray) -> np.ndarray:
-        """Sum a per-piston waveform over all pistons, each shifted by 2 pi / N.
+        """
+        Sum a per-piston waveform over all pistons, each shifted by 2 pi / N.
 
         Parameters
         ----------
@@ -262,13 +323,34 @@ class PumpModel:
         -------
         ndarray, shape (..., n)
             Sum over the N pistons at each shaft angle.
-        """
-        return sum(np.roll(per_piston, -i * self._shift, axis=-1)
-                   for i in range(self.params.geometry.n_pistons))
 
-    def evaluate(self, speed_rad_s, pressure_diff_pa, viscosity_m2_s=None, *,
-                 waveforms: bool = False, chunk: int = 256) -> TorqueResult:
-        """Revolution-mean torques at operating points (broadcast against each other).
+        """
+        return np.asarray(sum(np.roll(per_piston, -i * self._shift, axis=-1)
+                              for i in range(self.params.geometry.n_pistons)))
+
+    @overload
+    def evaluate(self, speed_rad_s: ArrayLike, pressure_diff_pa: ArrayLike,
+                 viscosity_m2_s: ArrayLike | None = None, *, waveforms: Literal[False] = False,
+                 chunk: int = 256) -> TorqueResult:
+        ...
+
+    @overload
+    def evaluate(self, speed_rad_s: ArrayLike, pressure_diff_pa: ArrayLike,
+                 viscosity_m2_s: ArrayLike | None = None, *, waveforms: Literal[True],
+                 chunk: int = 256) -> TorqueResultWithWaveforms:
+        ...
+
+    @overload
+    def evaluate(self, speed_rad_s: ArrayLike, pressure_diff_pa: ArrayLike,
+                 viscosity_m2_s: ArrayLike | None = None, *, waveforms: bool,
+                 chunk: int = 256) -> TorqueResult:
+        ...
+
+    def evaluate(self, speed_rad_s: ArrayLike, pressure_diff_pa: ArrayLike,
+                 viscosity_m2_s: ArrayLike | None = None, *, waveforms: bool = False,
+                 chunk: int = 256) -> TorqueResult:
+        """
+        Revolution-mean torques at operating points (broadcast against each other).
 
         Parameters
         ----------
@@ -286,7 +368,9 @@ class PumpModel:
         Returns
         -------
         TorqueResult
-            Flattened, broadcast operating points and their torques.
+            Flattened, broadcast operating points and their torques
+            (`TorqueResultWithWaveforms` with ``waveforms=True``).
+
         """
         if viscosity_m2_s is None:
             viscosity_m2_s = self.params.oil.viscosity_m2_s
@@ -303,7 +387,8 @@ class PumpModel:
             raise ValueError('no operating point given')
         return _concat(parts, waveforms)
 
-    def _evaluate_chunk(self, speed, dp, visc, want_waveforms):
+    def _evaluate_chunk(self, speed: np.ndarray, dp: np.ndarray, visc: np.ndarray,
+                        want_waveforms: bool) -> TorqueResult:
         p = self.params
         op = p.operation
         speed_abs = np.abs(speed)
@@ -313,7 +398,7 @@ class PumpModel:
 
         # Linear in the per-piston waveforms: without waveforms, the revolution mean of the
         # sum over pistons is N times one piston's mean (no phase-shifted sum needed).
-        def piston_sum(per_piston):
+        def piston_sum(per_piston: np.ndarray) -> np.ndarray:
             if want_waveforms:
                 return self.sum_pistons(per_piston)
             return p.geometry.n_pistons * per_piston.mean(axis=1, keepdims=True)
@@ -339,8 +424,7 @@ class PumpModel:
         mags = {'valve_plate': vp.mean(axis=1), 'bearing': bearing.mean(axis=1),
                 'spherical_joints': joints.mean(axis=1), 'piston_heads': heads.mean(axis=1)}
         direction = smooth_sign(speed, op.zero_speed_threshold_rad_s)
-        friction = sum(mags.values())
-        tin = theoretical + direction * friction
+        tin = input_torque_nm(theoretical, sum(mags.values()), direction)
         eff = torque_efficiency(theoretical, tin, speed, dp, op.efficiency_min_speed_rad_s,
                                 op.efficiency_min_pressure_pa)
         wf = None
@@ -357,7 +441,9 @@ class PumpModel:
                 bearing_load_n=load,
                 head_velocity_m_s=speed[:, None] * self.kin.head_vel_per_speed[None],
                 piston_omega_rad_s=speed[:, None, None] * self.kin.omega_rel_per_speed[None])
-        return TorqueResult(
+        result_type: type[TorqueResult] = (TorqueResultWithWaveforms if want_waveforms
+                                           else TorqueResult)
+        return result_type(
             speed_rad_s=speed, pressure_diff_pa=dp, viscosity_m2_s=visc, direction=direction,
             theoretical_nm=theoretical, magnitudes_nm=mags, efficiency=eff,
             head_force_max_n=np.linalg.norm(loads.head_force_n, axis=-1).max(axis=1),
@@ -370,16 +456,18 @@ def _concat(parts: list[TorqueResult], waveforms: bool) -> TorqueResult:
     if len(parts) == 1:
         return parts[0]
 
-    def cat(name):
+    def cat(name: str) -> np.ndarray:
         return np.concatenate([getattr(r, name) for r in parts])
 
     wf = None
     if waveforms:
         fields = Waveforms.__dataclass_fields__
-        wf = Waveforms(**{f: (parts[0].waveforms.shaft_angle_rad if f == 'shaft_angle_rad'
-                              else np.concatenate([getattr(r.waveforms, f) for r in parts]))
+        wfs = [r.waveforms for r in parts if r.waveforms is not None]
+        wf = Waveforms(**{f: (wfs[0].shaft_angle_rad if f == 'shaft_angle_rad'
+                              else np.concatenate([getattr(w, f) for w in wfs]))
                           for f in fields})
-    return TorqueResult(
+    result_type: type[TorqueResult] = TorqueResultWithWaveforms if waveforms else TorqueResult
+    return result_type(
         speed_rad_s=cat('speed_rad_s'), pressure_diff_pa=cat('pressure_diff_pa'),
         viscosity_m2_s=cat('viscosity_m2_s'), direction=cat('direction'),
         theoretical_nm=cat('theoretical_nm'),

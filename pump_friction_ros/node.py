@@ -1,41 +1,108 @@
-"""ROS 2 node ``torque_estimator``: thin rclpy glue around the ROS-free `TorqueEstimator`.
+"""
+ROS 2 node ``torque_estimator``: thin rclpy glue around the ROS-free `TorqueEstimator`.
 
-Callbacks only convert messages to SI floats (``ros_messages``), call the core, and convert
-the results back. See README, "torque_estimator", for topics, parameters and diagnostics.
+Callbacks only convert messages to SI floats, call the core, and convert the results back.
+See README, "torque_estimator", for topics, parameters and diagnostics, and "CPU cost" for
+why the node subscribes raw messages, publishes serialised Float64s and keeps its QoS event
+handlers to the one that can fire.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import math
 import sys
+from typing import Any
 
-import rclpy
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+import rclpy
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    qos_policy_name_from_kind,
+    qos_profile_sensor_data,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import FluidPressure, JointState, Temperature
 from std_msgs.msg import Float64, Header
 from std_srvs.srv import Trigger
 
-from .config import NODE_NAME, PARAMETERS, ParameterSpec, config_from_mapping
+from .bags.cdr import MessageDecoder
+from .config import config_from_mapping, NODE_NAME, PARAMETERS, ParameterSpec
 from .errors import PumpFrictionError
-from .estimator import Estimate, estimator_from_config
+from .estimate import Estimate
+from .estimator import estimator_from_config
+from .inputs import (
+    FLOAT64,
+    FLUID_PRESSURE,
+    INPUTS,
+    inputs_for,
+    InputSpec,
+    JOINT_STATE,
+    TEMPERATURE,
+)
 from .ros_messages import (
-    OUTPUT_TOPICS,
-    MessageTypes,
     diagnostic_array,
-    float64_message,
-    joint_sample,
+    DIAGNOSTICS_QOS_DEPTH,
+    float64_cdr,
+    MessageTypes,
+    OUTPUT_QOS_DEPTH,
+    OUTPUT_TOPICS,
     outputs_of,
-    stamp_to_ns,
+    RELIABLE_INPUT_QOS_DEPTH,
 )
 
-OUTPUT_QOS_DEPTH = 10
-DIAGNOSTICS_QOS_DEPTH = 10
+_MESSAGE_CLASSES = {JOINT_STATE: JointState, FLOAT64: Float64, FLUID_PRESSURE: FluidPressure,
+                    TEMPERATURE: Temperature}
+
+
+def reliable_qos(depth: int) -> QoSProfile:
+    """
+    Return reliable, keep last ``depth``, volatile: the outputs' QoS, and reliable inputs'.
+
+    The replay writes the same profile into its output bag (``bags.sinks.output_qos``).
+
+    Parameters
+    ----------
+    depth : int
+        History depth [messages].
+
+    Returns
+    -------
+    QoSProfile
+        Deadline, lifespan and liveliness stay at the middleware's defaults.
+
+    """
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+def input_qos(reliable: bool) -> QoSProfile:
+    """
+    Return the QoS of the inputs: the sensor-data profile, or reliable with a deep history.
+
+    Parameters
+    ----------
+    reliable : bool
+        The ``reliable_inputs`` parameter.
+
+    Returns
+    -------
+    QoSProfile
+        Best effort, keep last 5 (``qos_profile_sensor_data``); or reliable, keep last
+        ``RELIABLE_INPUT_QOS_DEPTH``, volatile.
+
+    """
+    return reliable_qos(RELIABLE_INPUT_QOS_DEPTH) if reliable else qos_profile_sensor_data
 
 
 def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
@@ -43,11 +110,12 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
     desc = ParameterDescriptor(description=spec.description, read_only=True)
     if spec.choices:
         desc.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    finite = spec.low is not None and spec.high is not None and math.isfinite(spec.high)
-    if finite and isinstance(spec.default, int):  # (bool parameters have no range)
+    if spec.low is None or spec.high is None or not math.isfinite(spec.high):
+        return desc
+    if isinstance(spec.default, int):  # (bool parameters have no range)
         desc.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
                                            step=1)]
-    elif finite and isinstance(spec.default, float):
+    elif isinstance(spec.default, float):
         desc.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
                                                         to_value=float(spec.high), step=0.0)]
     return desc
@@ -56,7 +124,7 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
 class TorqueEstimatorNode(Node):
     """Subscribes to shaft speed, pressure and motor torque; publishes the estimates."""
 
-    def __init__(self, **node_kwargs) -> None:
+    def __init__(self, **node_kwargs: Any) -> None:
         super().__init__(NODE_NAME, **node_kwargs)
         values = {}
         for spec in PARAMETERS:
@@ -65,35 +133,48 @@ class TorqueEstimatorNode(Node):
             except (InvalidParameterValueException, InvalidParameterTypeException) as exc:
                 raise PumpFrictionError(f'parameter {spec.name}: {exc}') from None
             values[spec.name] = self.get_parameter(spec.name).value
-        self.config = config_from_mapping(values, 'parameter ')
+        self.config = config_from_mapping(values, 'parameter ',
+                                          default_origin='a node parameter')
         self.core = estimator_from_config(self.config)
         self._types = MessageTypes(Float64, Time, Header, KeyValue, DiagnosticStatus,
                                    DiagnosticArray)
+        # messages received per input, indexed by `InputKind` (tests, the CPU benchmark)
+        self.received = [0] * len(INPUTS)
         cfg = self.config
 
-        in_qos = (QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-                  if cfg.reliable_inputs else qos_profile_sensor_data)
-        out_qos = QoSProfile(depth=OUTPUT_QOS_DEPTH, reliability=ReliabilityPolicy.RELIABLE)
-        self._pub = {name: self.create_publisher(Float64, f'~/{name}', out_qos)
+        # Every publisher, subscription and QoS event handler is one more entity that rclpy's
+        # executor puts into the wait set it rebuilds for every message, which is most of
+        # the node's CPU cost at 1 kHz (README, "CPU cost"). rclpy gives each publisher and
+        # subscription two handlers by default (incompatible QoS, incompatible type).
+        # Outputs: none. An incompatible subscriber is told by its own side (rclpy and
+        # rclcpp subscriptions warn by default), so ours would only repeat it.
+        quiet_publisher = PublisherEventCallbacks(use_default_callbacks=False)
+        self._pub = {name: self.create_publisher(Float64, f'~/{name}',
+                                                 reliable_qos(OUTPUT_QOS_DEPTH),
+                                                 event_callbacks=quiet_publisher)
                      for name in OUTPUT_TOPICS}
-        self._diag_pub = self.create_publisher(
-            DiagnosticArray, '/diagnostics',
-            QoSProfile(depth=DIAGNOSTICS_QOS_DEPTH, reliability=ReliabilityPolicy.RELIABLE))
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
+                                               reliable_qos(DIAGNOSTICS_QOS_DEPTH),
+                                               event_callbacks=quiet_publisher)
 
-        subscribe = self.create_subscription
-        if 'joint_state' in (cfg.speed_source, cfg.torque_source):
-            subscribe(JointState, 'joint_states', self._on_joint_state, in_qos)
-        if cfg.speed_source == 'float64':
-            subscribe(Float64, 'shaft_speed', self._on_shaft_speed, in_qos)
-        if cfg.torque_source == 'float64':
-            subscribe(Float64, 'motor_torque', self._on_motor_torque, in_qos)
-        if cfg.pressure_source == 'difference':
-            subscribe(FluidPressure, 'load_pressure', self._on_load_pressure, in_qos)
-        else:
-            subscribe(FluidPressure, 'pressure_a', self._on_pressure_a, in_qos)
-            subscribe(FluidPressure, 'pressure_b', self._on_pressure_b, in_qos)
-        if cfg.viscosity_source == 'temperature':
-            subscribe(Temperature, 'oil_temperature', self._on_temperature, in_qos)
+        # Inputs: one handler, incompatible QoS, and only where it can fire. A best-effort,
+        # volatile subscription with the default deadline and liveliness (the sensor-data
+        # profile) requests the least of every policy, so every publisher matches it; a
+        # reliable one does not match a best-effort publisher, which then sends the node
+        # nothing: that must be said. (An rmw without the event makes rclpy skip the handler,
+        # `SubscriptionEventCallbacks.create_event_handlers` catches UnsupportedEventTypeError.)
+        in_qos = input_qos(cfg.reliable_inputs)
+        for inp in inputs_for(cfg):
+            events = SubscriptionEventCallbacks(
+                incompatible_qos=self._incompatible_qos_warning(inp.topic)
+                if cfg.reliable_inputs else None,
+                use_default_callbacks=False)
+            sub = self.create_subscription(_MESSAGE_CLASSES[inp.msgtype], inp.topic,
+                                           self._input_callback(inp), in_qos,
+                                           event_callbacks=events, raw=True)
+            if cfg.reliable_inputs and not sub.event_handlers:
+                self.get_logger().info(f'the middleware reports no incompatible QoS on '
+                                       f'{inp.topic}: a best-effort publisher goes unnoticed')
         self.create_service(Trigger, '~/reset_monitor', self._on_reset)
         self.create_timer(1.0 / cfg.diagnostics_rate_hz, self._on_diagnostics_timer)
         self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
@@ -107,55 +188,67 @@ class TorqueEstimatorNode(Node):
     def _now_ns(self) -> int:
         return self.get_clock().now().nanoseconds
 
-    def _stamp_ns(self, msg) -> int:
-        stamp = stamp_to_ns(msg.header.stamp)
-        return self._now_ns() if stamp is None else stamp
-
     def _publish(self, estimate: Estimate | None) -> None:
         if estimate is None or not estimate.publish:
             return
+        pub = self._pub
         for name, value in outputs_of(estimate):
-            self._pub[name].publish(float64_message(self._types, value))
+            pub[name].publish(float64_cdr(value))  # serialised: no message object to build
 
     # -- callbacks: message -> SI -> core -> message ----------------------------------------
 
-    def _on_joint_state(self, msg: JointState) -> None:
-        sample = joint_sample(msg, self.config.joint_name)
-        if sample is not None:
-            self._publish(self.core.on_joint_state(self._stamp_ns(msg), *sample))
+    def _input_callback(self, spec: InputSpec) -> Callable[[bytes], None]:
+        """Return the callback of one raw input subscription (serialised CDR in)."""
+        cls = _MESSAGE_CLASSES[spec.msgtype]
+        decode = MessageDecoder(spec, self.config.joint_name,
+                                lambda raw: deserialize_message(raw, cls))
+        core, kind, received, now_ns = self.core, spec.kind, self.received, self._now_ns
 
-    def _on_shaft_speed(self, msg: Float64) -> None:
-        self._publish(self.core.on_speed(self._now_ns(), msg.data))
+        def on_message(raw: bytes) -> None:
+            received[kind] += 1
+            stamp, value, torque, defect = decode(raw)
+            if defect:
+                core.on_defect(defect)
+                return
+            now = now_ns()
+            self._publish(core.on_input(kind, stamp or now, value, torque, now))
 
-    def _on_motor_torque(self, msg: Float64) -> None:
-        self.core.on_torque(self._now_ns(), msg.data)
+        return on_message
 
-    def _on_load_pressure(self, msg: FluidPressure) -> None:
-        self.core.on_pressure(self._stamp_ns(msg), msg.fluid_pressure)
+    def _incompatible_qos_warning(self, topic: str) -> Callable[[Any], None]:
+        """Return an incompatible-QoS event handler warning once per topic and policy."""
+        warned: set[str] = set()
 
-    def _on_pressure_a(self, msg: FluidPressure) -> None:
-        self.core.on_port_pressure('a', self._stamp_ns(msg), msg.fluid_pressure)
+        def on_event(event: Any) -> None:
+            try:
+                policy = qos_policy_name_from_kind(event.last_policy_kind)
+            except ValueError:
+                policy = str(event.last_policy_kind)
+            if policy in warned:
+                return
+            warned.add(policy)
+            self.get_logger().warning(
+                f'input {topic}: a publisher offers incompatible QoS ({policy}); nothing it '
+                f'sends reaches this node (reliable_inputs is true: is it best effort?)')
 
-    def _on_pressure_b(self, msg: FluidPressure) -> None:
-        self.core.on_port_pressure('b', self._stamp_ns(msg), msg.fluid_pressure)
-
-    def _on_temperature(self, msg: Temperature) -> None:
-        self.core.on_temperature(self._stamp_ns(msg), msg.temperature)
+        return on_event
 
     def _on_diagnostics_timer(self) -> None:
         now = self._now_ns()
         self._diag_pub.publish(diagnostic_array(self._types, self.core.diagnostics(now), now,
                                                 self._status_name, self.config.hardware_id))
 
-    def _on_reset(self, request: Trigger.Request, response: Trigger.Response):
-        self.core.monitor.reset()
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response
+                  ) -> Trigger.Response:
+        self.core.reset_monitor()
         response.success = True
         response.message = 'wear monitor reset: friction as modelled, no alarm'
         return response
 
 
 def main(args: list[str] | None = None) -> int:
-    """Run the node (console script ``torque_estimator``).
+    """
+    Run the node (console script ``torque_estimator``).
 
     Parameters
     ----------
@@ -166,6 +259,7 @@ def main(args: list[str] | None = None) -> int:
     -------
     int
         0 on a normal shutdown, 1 when the parameters, pump file or table are invalid.
+
     """
     rclpy.init(args=args)
     node = None

@@ -10,7 +10,8 @@ _KELVIN = 273.15
 
 
 class WaltherViscosity:
-    """Kinematic viscosity from temperature, ASTM D341: log log (nu + 0.7) = A - B log T.
+    """
+    Kinematic viscosity from temperature, ASTM D341: log log (nu + 0.7) = A - B log T.
 
     nu in cSt and T in K inside the empirical law; SI (m^2/s, degC) at the interface.
 
@@ -20,6 +21,7 @@ class WaltherViscosity:
         Kinematic viscosity at 40 degC [m^2/s].
     viscosity_100c_m2_s : float
         Kinematic viscosity at 100 degC [m^2/s].
+
     """
 
     def __init__(self, viscosity_40c_m2_s: float, viscosity_100c_m2_s: float) -> None:
@@ -32,7 +34,8 @@ class WaltherViscosity:
         self._a = z40 + self._b * t40
 
     def __call__(self, temperature_c: float) -> float:
-        """Kinematic viscosity at a temperature.
+        """
+        Kinematic viscosity at a temperature.
 
         Parameters
         ----------
@@ -43,6 +46,7 @@ class WaltherViscosity:
         -------
         float
             Kinematic viscosity [m^2/s].
+
         """
         z = self._a - self._b * math.log10(temperature_c + _KELVIN)
         return (10.0 ** (10.0 ** z) - 0.7) * 1e-6

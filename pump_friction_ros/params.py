@@ -1,24 +1,28 @@
-"""Pump parameter sets: loading, validation and hashing of the YAML files in ``config/pumps``.
+"""
+Pump parameter sets: loading, validation and hashing of the YAML files in ``config/pumps``.
 
 Every value is SI. The YAML files say, value by value, where each number comes from
 (Hong & Doh 2004 table, figure or text; or how it was fixed when the paper leaves it open).
+
+Longer than 500 lines because each parameter's dataclass field, its physical range and the
+reason for that range are kept side by side, one schema read in one place.
 """
 
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass, field
 import hashlib
+from itertools import pairwise
 import json
 import math
-import sys
-from dataclasses import asdict, dataclass, field
-from itertools import pairwise
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 import yaml
 
-from .errors import ConfigError
+from .errors import ConfigError, quote
+from .paths import config_dir, default_pump_file, resolve_path
 
 __all__ = [
     'Bearing',
@@ -30,6 +34,7 @@ __all__ = [
     'PistonFriction',
     'PumpParams',
     'ValvePlate',
+    'config_dir',
     'default_pump_file',
     'load_pump',
     'pump_from_mapping',
@@ -37,10 +42,28 @@ __all__ = [
 
 JOINT_SLIDING_FRAMES = ('barrel', 'flange')
 
+# Physical ranges of pump-file values (SI). None is from the paper: they keep a file inside
+# what an axial piston pump can be, so that a slip (a unit, a sign, 1e-320) is refused with
+# the field's name instead of giving infinite or NaN torques.
+MIN_LENGTH_M = 1e-4
+"""0.1 mm: no dimension of a pump's moving parts is smaller (bores of the smallest units,
+~0.5 cc/rev, are ~4 mm; ball joints ~1 mm)."""
+FILM_CLEARANCE_RANGE_M = (1e-7, 1e-3)
+"""0.1 um to 1 mm: below the roughness of lapped valve plates (Ra ~ 0.1 um) there is no
+film to shear, which the Couette term assumes; above 1 mm the plate no longer seals (the
+paper's 10 um and the effective 1.07 um lie well inside)."""
+MIN_PISTON_MASS_KG = 1e-5
+"""10 mg: a steel piston of the smallest bore (1 mm x 2 mm) weighs ~12 mg."""
+VISCOSITY_RANGE_M2_S = (1e-7, 1e-2)
+"""0.1 cSt (below any hydraulic fluid: water is 1 cSt) to 10,000 cSt (cold gear oil)."""
+MIN_INCLINATION_RAD = math.radians(1.0)
+"""1 deg: bent-axis units run at 15-45 deg; near 0 the stroke vanishes."""
+
 
 @dataclass(frozen=True)
 class Curve:
-    """A piecewise-linear curve y(x), held constant beyond its end points.
+    """
+    A piecewise-linear curve y(x), held constant beyond its end points.
 
     Used for the friction coefficients the paper gives as measured curves (Figs. 6, 7, 9).
     """
@@ -48,8 +71,17 @@ class Curve:
     x: tuple[float, ...]
     y: tuple[float, ...]
 
-    def __call__(self, x: np.ndarray | float) -> np.ndarray:
-        """Evaluate the curve (linear between points, constant outside).
+    @overload
+    def __call__(self, x: float) -> float:
+        ...
+
+    @overload
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        ...
+
+    def __call__(self, x: np.ndarray | float) -> np.ndarray | float:
+        """
+        Evaluate the curve (linear between points, constant outside).
 
         Parameters
         ----------
@@ -58,8 +90,9 @@ class Curve:
 
         Returns
         -------
-        ndarray
-            Ordinate [-].
+        float or ndarray
+            Ordinate [-], a float for a float.
+
         """
         return np.interp(x, self.x, self.y)
 
@@ -84,7 +117,8 @@ class Geometry:
 
     @property
     def stroke_m(self) -> float:
-        """Piston stroke of the Fig. 2 geometry, 2 R_S sin(delta) [m].
+        """
+        Piston stroke of the Fig. 2 geometry, 2 R_S sin(delta) [m].
 
         Exact for axes that intersect in the drive-flange plane, whatever the rod length
         and bore pitch radius (the bore-axis position at shaft angles 0 and pi differs by
@@ -126,7 +160,8 @@ class ValvePlate:
 
     @property
     def bridge_angle_rad(self) -> float:
-        """Angular width of the land between the two kidney ports [rad].
+        """
+        Angular width of the land between the two kidney ports [rad].
 
         Derived from Fig. 2(b): kidneys of radial width r_o - r_i with round ends, and a
         zero-overlap bridge as wide as the kidney at the port pitch radius (r_o + r_i)/2.
@@ -204,7 +239,8 @@ class PumpParams:
 
 
 def _as_number(value: Any) -> float | None:
-    """Return ``value`` as a float, or None if it is not a number.
+    """
+    Return ``value`` as a float, or None if it is not a number.
 
     PyYAML follows YAML 1.1, where ``5.0e5`` (no exponent sign) is a string; such plain
     numeric strings are accepted as numbers. Booleans are not numbers.
@@ -251,30 +287,30 @@ class _Section:
                low_inclusive: bool = False) -> float:
         value = _as_number(self.raw(key))
         if value is None:
-            raise self._error(key, f'expected a number, got {self._mapping[key]!r}')
+            raise self._error(key, f'expected a number, got {quote(self._mapping[key])}')
         if not math.isfinite(value):
             raise self._error(key, f'must be finite, got {value}')
         if low is not None and (value < low or (value == low and not low_inclusive)):
             relation = '>=' if low_inclusive else '>'
-            raise self._error(key, f'must be {relation} {low}, got {value}')
+            raise self._error(key, f'must be {relation} {low:g}, got {value:g}')
         if high is not None and value > high:
-            raise self._error(key, f'must be <= {high}, got {value}')
+            raise self._error(key, f'must be <= {high:g}, got {value:g}')
         return value
 
     def integer(self, key: str, *, low: int) -> int:
-        value = self.raw(key)
+        value: object = self.raw(key)
         if isinstance(value, bool) or not isinstance(value, int):
-            raise self._error(key, f'expected an integer, got {value!r}')
+            raise self._error(key, f'expected an integer, got {quote(value)}')
         if value < low:
-            raise self._error(key, f'must be >= {low}, got {value}')
+            raise self._error(key, f'must be >= {low}, got {quote(value)}')
         return value
 
     def text(self, key: str, choices: tuple[str, ...] | None = None) -> str:
         value = self.raw(key)
         if not isinstance(value, str):
-            raise self._error(key, f'expected a string, got {value!r}')
+            raise self._error(key, f'expected a string, got {quote(value)}')
         if choices is not None and value not in choices:
-            raise self._error(key, f'must be one of {", ".join(choices)}, got {value!r}')
+            raise self._error(key, f'must be one of {", ".join(choices)}, got {quote(value)}')
         return value
 
     def curve(self, key: str, x_key: str, *, low: float = 0.0, high: float = 1.0) -> Curve:
@@ -285,7 +321,7 @@ class _Section:
         for label, seq in (('abscissa', xs), ('coefficient', ys)):
             if not isinstance(seq, list) or not seq:
                 raise ConfigError(f'{self._where}: {name}: {label} must be a non-empty list')
-            if any(_as_number(v) is None or not math.isfinite(_as_number(v)) for v in seq):
+            if any((n := _as_number(v)) is None or not math.isfinite(n) for v in seq):
                 raise ConfigError(f'{self._where}: {name}: {label} must hold finite numbers')
         xs, ys = [_as_number(v) for v in xs], [_as_number(v) for v in ys]
         if len(xs) != len(ys):
@@ -302,11 +338,12 @@ class _Section:
         unknown = sorted(set(self._mapping) - self._used)
         if unknown:
             raise ConfigError(f'{self._where}: {self._path or "top level"}: unknown key(s) '
-                              f'{", ".join(map(str, unknown))}')
+                              f'{", ".join(quote(k) for k in unknown)}')
 
 
 def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
-    """Build a validated `PumpParams` from the parsed YAML mapping.
+    """
+    Build a validated `PumpParams` from the parsed YAML mapping.
 
     Parameters
     ----------
@@ -324,34 +361,46 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
     ------
     ConfigError
         One clear message naming the first missing, mistyped or non-physical field.
+
     """
     top = _Section(data, '', where)
     name = top.text('name')
     description = top.text('description')
 
+    length: dict[str, Any] = {'low': MIN_LENGTH_M, 'low_inclusive': True}
     g = top.section('geometry')
     geometry = Geometry(
         n_pistons=g.integer('n_pistons', low=3),
-        bore_diameter_m=g.number('bore_diameter_m', low=0.0, high=0.5),
-        inclination_rad=g.number('inclination_rad', low=0.0, high=math.radians(60.0)),
-        joint_pitch_radius_m=g.number('joint_pitch_radius_m', low=0.0, high=0.5),
-        bore_pitch_radius_m=g.number('bore_pitch_radius_m', low=0.0, high=0.5),
-        rod_length_m=g.number('rod_length_m', low=0.0, high=1.0),
-        joint_ball_radius_m=g.number('joint_ball_radius_m', low=0.0, high=0.1),
-        head_radius_m=g.number('head_radius_m', low=0.0, high=0.25),
+        bore_diameter_m=g.number('bore_diameter_m', high=0.5, **length),
+        inclination_rad=g.number('inclination_rad', low=MIN_INCLINATION_RAD,
+                                 high=math.radians(60.0), low_inclusive=True),
+        joint_pitch_radius_m=g.number('joint_pitch_radius_m', high=0.5, **length),
+        bore_pitch_radius_m=g.number('bore_pitch_radius_m', high=0.5, **length),
+        rod_length_m=g.number('rod_length_m', high=1.0, **length),
+        joint_ball_radius_m=g.number('joint_ball_radius_m', high=0.1, **length),
+        head_radius_m=g.number('head_radius_m', high=0.25, **length),
     )
     g.finish()
     offset = 2.0 * geometry.joint_pitch_radius_m
     if geometry.rod_length_m <= offset:
         raise ConfigError(f'{where}: geometry.rod_length_m: must exceed 2 x joint_pitch_radius_m'
                           f' ({offset:g} m) for the piston to stay in its bore')
+    # the bores must not cut into each other: centres 2 R_C sin(pi / N) apart on the pitch
+    # circle, more than a bore diameter (this also bounds N: 1e9 pistons fit no barrel)
+    spacing = 2.0 * geometry.bore_pitch_radius_m * math.sin(math.pi / geometry.n_pistons)
+    if spacing <= geometry.bore_diameter_m:
+        raise ConfigError(f'{where}: geometry.n_pistons: {quote(geometry.n_pistons)} bores of '
+                          f'{geometry.bore_diameter_m:g} m do not fit on the bore pitch circle'
+                          f' of radius {geometry.bore_pitch_radius_m:g} m (adjacent centres '
+                          f'{spacing:.3g} m apart)')
 
     p = top.section('piston')
     piston = Piston(
-        mass_kg=p.number('mass_kg', low=0.0, high=10.0),
+        mass_kg=p.number('mass_kg', low=MIN_PISTON_MASS_KG, high=10.0, low_inclusive=True),
         joint_to_cg_m=p.number('joint_to_cg_m', low=0.0, high=1.0, low_inclusive=True),
-        inertia_axial_kg_m2=p.number('inertia_axial_kg_m2', low=0.0, low_inclusive=True),
-        inertia_transverse_kg_m2=p.number('inertia_transverse_kg_m2', low=0.0,
+        inertia_axial_kg_m2=p.number('inertia_axial_kg_m2', low=0.0, high=1.0,
+                                     low_inclusive=True),
+        inertia_transverse_kg_m2=p.number('inertia_transverse_kg_m2', low=0.0, high=1.0,
                                           low_inclusive=True),
     )
     p.finish()
@@ -360,11 +409,12 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
 
     v = top.section('valve_plate')
     valve_plate = ValvePlate(
-        land_inner_radius_m=v.number('land_inner_radius_m', low=0.0),
-        port_inner_radius_m=v.number('port_inner_radius_m', low=0.0),
-        port_outer_radius_m=v.number('port_outer_radius_m', low=0.0),
-        land_outer_radius_m=v.number('land_outer_radius_m', low=0.0, high=0.5),
-        film_clearance_m=v.number('film_clearance_m', low=0.0, high=1e-3),
+        land_inner_radius_m=v.number('land_inner_radius_m', high=0.5, **length),
+        port_inner_radius_m=v.number('port_inner_radius_m', high=0.5, **length),
+        port_outer_radius_m=v.number('port_outer_radius_m', high=0.5, **length),
+        land_outer_radius_m=v.number('land_outer_radius_m', high=0.5, **length),
+        film_clearance_m=v.number('film_clearance_m', low=FILM_CLEARANCE_RANGE_M[0],
+                                  high=FILM_CLEARANCE_RANGE_M[1], low_inclusive=True),
         coulomb_coefficient=v.curve('coulomb_coefficient', 'speed_rad_s'),
     )
     v.finish()
@@ -372,6 +422,14 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
              valve_plate.port_outer_radius_m, valve_plate.land_outer_radius_m)
     if not all(a < b for a, b in pairwise(radii)):
         raise ConfigError(f'{where}: valve_plate: radii must satisfy R_i < r_i < r_o < R_o')
+    from .friction import barrel_effective_area_m2  # eq. (9); friction imports this module
+
+    area = barrel_effective_area_m2(geometry, valve_plate)
+    if area <= 0.0:  # the film's pressure field outweighs the pistons: the barrel lifts off
+        raise ConfigError(f'{where}: valve_plate: the pressure field under the lands lifts '
+                          f'more than the piston area presses (A_b = {area:.3g} m^2 <= 0, '
+                          'eq. 9): the barrel would lift off; check the radii against '
+                          'geometry.bore_diameter_m and n_pistons')
 
     b = top.section('bearing')
     bearing = Bearing(
@@ -379,7 +437,7 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
         f1=b.number('f1', low=0.0, high=1.0, low_inclusive=True),
         a=b.number('a', low=0.0, high=3.0),
         b=b.number('b', low=0.0, high=3.0),
-        mean_diameter_m=b.number('mean_diameter_m', low=0.0, high=1.0),
+        mean_diameter_m=b.number('mean_diameter_m', high=1.0, **length),
     )
     b.finish()
 
@@ -394,7 +452,8 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
     o = top.section('oil')
     oil = Oil(
         density_kg_m3=o.number('density_kg_m3', low=100.0, high=3000.0),
-        viscosity_m2_s=o.number('viscosity_m2_s', low=0.0, high=1e-2),
+        viscosity_m2_s=o.number('viscosity_m2_s', low=VISCOSITY_RANGE_M2_S[0],
+                                high=VISCOSITY_RANGE_M2_S[1], low_inclusive=True),
     )
     o.finish()
 
@@ -403,8 +462,10 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
         charge_pressure_pa=op.number('charge_pressure_pa', low=0.0, high=1e7,
                                      low_inclusive=True),
         zero_speed_threshold_rad_s=op.number('zero_speed_threshold_rad_s', low=0.0, high=100.0),
-        efficiency_min_speed_rad_s=op.number('efficiency_min_speed_rad_s', low=0.0),
-        efficiency_min_pressure_pa=op.number('efficiency_min_pressure_pa', low=0.0),
+        efficiency_min_speed_rad_s=op.number('efficiency_min_speed_rad_s', low=0.0,
+                                             high=1e4),
+        efficiency_min_pressure_pa=op.number('efficiency_min_pressure_pa', low=0.0,
+                                             high=2e8),
     )
     op.finish()
     if 'provenance' in data:  # written by `pump_friction calibrate`; not a parameter
@@ -417,12 +478,15 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
 
 
 def load_pump(path: str | Path | None = None) -> PumpParams:
-    """Load and validate a pump parameter file.
+    """
+    Load and validate a pump parameter file.
 
     Parameters
     ----------
     path : str or Path, optional
-        YAML file. Default: the paper's pump, ``config/pumps/hong_doh_2004.yaml``.
+        YAML file, ``package://pump_friction_ros/...`` path or shipped set name
+        (``hong_doh_2004_consistent``; see ``paths.resolve_path``). Default: the paper's
+        pump, ``config/pumps/hong_doh_2004.yaml``.
 
     Returns
     -------
@@ -433,8 +497,10 @@ def load_pump(path: str | Path | None = None) -> PumpParams:
     ------
     ConfigError
         When the file is missing, is not valid YAML, or any field is invalid.
+
     """
-    path = Path(path) if path is not None else default_pump_file()
+    path = default_pump_file() if path is None or str(path) == '' else \
+        resolve_path(path, 'pump file', pump_set=True)
     try:
         text = path.read_text(encoding='utf-8')
     except FileNotFoundError:
@@ -448,37 +514,7 @@ def load_pump(path: str | Path | None = None) -> PumpParams:
         at = f' (line {mark.line + 1}, column {mark.column + 1})' if mark else ''
         problem = getattr(exc, 'problem', None) or 'invalid YAML'
         raise ConfigError(f'{path}: invalid YAML{at}: {problem}') from None
+    except (ValueError, RecursionError):  # a number of thousands of digits, deep nesting
+        raise ConfigError(f'{path}: invalid YAML: a number too long or nesting too deep') \
+            from None
     return pump_from_mapping(data, str(path))
-
-
-def config_dir() -> Path:
-    """Locate the package's ``config`` folder (source checkout, pip or colcon install).
-
-    Returns
-    -------
-    Path
-        The folder holding ``torque_estimator.yaml`` and ``pumps/``.
-    """
-    here = Path(__file__).resolve().parent
-    candidates = [here.parent / 'config']
-    candidates.append(Path(sys.prefix) / 'share' / 'pump_friction_ros' / 'config')
-    try:  # a colcon / ament install
-        from ament_index_python.packages import get_package_share_directory
-        candidates.append(Path(get_package_share_directory('pump_friction_ros')) / 'config')
-    except Exception:  # ament_index missing, or the package is not in the index
-        pass
-    for candidate in candidates:
-        if (candidate / 'pumps').is_dir():
-            return candidate
-    raise ConfigError('cannot find the pump_friction_ros config folder; pass --pump FILE')
-
-
-def default_pump_file() -> Path:
-    """Path of the default pump parameter file (the paper's pump).
-
-    Returns
-    -------
-    Path
-        ``config/pumps/hong_doh_2004.yaml``.
-    """
-    return config_dir() / 'pumps' / 'hong_doh_2004.yaml'

@@ -1,4 +1,5 @@
-"""Cylinder-chamber pressure over a revolution, in the spirit of Hong & Doh (2004) Fig. 12.
+"""
+Cylinder-chamber pressure over a revolution, in the spirit of Hong & Doh (2004) Fig. 12.
 
 Construction
 ------------
@@ -23,7 +24,8 @@ __all__ = ['chamber_pressure', 'port_a_weight']
 
 
 def port_a_weight(phi: np.ndarray, bridge_rad: float) -> np.ndarray:
-    """Fraction (0..1) of the port-A pressure seen by a chamber at phase ``phi``.
+    """
+    Fraction (0..1) of the port-A pressure seen by a chamber at phase ``phi``.
 
     Parameters
     ----------
@@ -36,6 +38,7 @@ def port_a_weight(phi: np.ndarray, bridge_rad: float) -> np.ndarray:
     -------
     ndarray
         1 over port A, 0 over port B, a raised-cosine ramp over each bridge [-].
+
     """
     psi = np.mod(phi + np.pi, 2.0 * np.pi) - np.pi  # in [-pi, pi)
     weight = (psi > 0.0).astype(float)
@@ -49,7 +52,8 @@ def port_a_weight(phi: np.ndarray, bridge_rad: float) -> np.ndarray:
 
 def chamber_pressure(phi: np.ndarray, pressure_diff_pa: np.ndarray, charge_pressure_pa: float,
                      bridge_rad: float) -> np.ndarray:
-    """Chamber pressure for each operating point and phase angle.
+    """
+    Chamber pressure for each operating point and phase angle.
 
     Parameters
     ----------
@@ -66,6 +70,7 @@ def chamber_pressure(phi: np.ndarray, pressure_diff_pa: np.ndarray, charge_press
     -------
     ndarray, shape (m, n)
         Chamber pressure [Pa].
+
     """
     dp = np.asarray(pressure_diff_pa, dtype=float)[:, None]
     w_a = port_a_weight(np.asarray(phi, dtype=float), bridge_rad)[None, :]

@@ -10,7 +10,8 @@ __all__ = ['ProgressBar']
 
 
 class ProgressBar:
-    """Progress bar drawn on a terminal after ``delay_s``; silent when not a terminal.
+    """
+    Progress bar drawn on a terminal after ``delay_s``; silent when not a terminal.
 
     Parameters
     ----------
@@ -22,6 +23,7 @@ class ProgressBar:
         Where to draw (default ``sys.stderr``).
     enabled : bool
         False for ``--quiet``.
+
     """
 
     def __init__(self, label: str, delay_s: float = 0.5, stream: TextIO | None = None,
@@ -35,12 +37,14 @@ class ProgressBar:
         self._last = -1
 
     def __call__(self, fraction: float) -> None:
-        """Report the fraction of the job done (0..1).
+        """
+        Report the fraction of the job done (0..1).
 
         Parameters
         ----------
         fraction : float
             Fraction done [-].
+
         """
         if not self.enabled or time.monotonic() - self._start < self.delay_s:
             return

@@ -1,4 +1,5 @@
-"""Messages <-> SI floats, for rclpy and rosbags message classes alike (no ROS import here).
+"""
+Messages <-> SI floats, for rclpy and rosbags message classes alike (no ROS import here).
 
 rclpy messages and rosbags' message dataclasses have the same field names, so every
 function here takes either. Message classes are passed in through `MessageTypes`, built
@@ -7,17 +8,25 @@ from rclpy's classes in the node or by `rosbags_types()` in the replay and the t
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+import math
+import struct
 from typing import Any
 
-from .estimator import DiagnosticSnapshot, Estimate
+from .diagnostics import DiagnosticSnapshot
+from .estimate import Estimate
+from .inputs import Defect, InputSpec
 
 __all__ = [
+    'DIAGNOSTICS_QOS_DEPTH',
+    'OUTPUT_QOS_DEPTH',
     'OUTPUT_TOPICS',
+    'RELIABLE_INPUT_QOS_DEPTH',
     'MessageTypes',
     'diagnostic_array',
+    'float64_cdr',
     'float64_message',
+    'input_sample',
     'joint_sample',
     'level_from_msg',
     'level_to_msg',
@@ -31,9 +40,31 @@ OUTPUT_TOPICS = ('expected_torque', 'friction_torque', 'efficiency', 'residual',
                  'valve_plate_friction_scale')
 """Private topics of the node (``~/<name>``), std_msgs/Float64 each."""
 
+OUTPUT_QOS_DEPTH = 10
+"""
+History depth of the node's Float64 outputs [messages].
+
+Every output of the node (these and /diagnostics) is published reliable, keep last,
+volatile; the node's publishers and the replay's output bag (its ``offered_qos_profiles``)
+are both made from these constants.
+"""
+DIAGNOSTICS_QOS_DEPTH = 10
+"""History depth of /diagnostics [messages] (reliable, keep last, volatile)."""
+RELIABLE_INPUT_QOS_DEPTH = 100
+"""
+History depth of the inputs with ``reliable_inputs: true`` [messages].
+
+100 ms of a 1 kHz input: the node loses nothing while its executor is held up for less
+than that (a reliable reader keeping only the last 10 would drop samples after 10 ms).
+"""
+
+_CDR_LE = b'\x00\x01\x00\x00'
+_DOUBLE = struct.Struct('<d')
+
 
 def outputs_of(estimate: Estimate) -> list[tuple[str, float]]:
-    """Topic and value of each output an estimate publishes.
+    """
+    Topic and value of each output an estimate publishes.
 
     Efficiency is published only where defined and the residual only with a fresh measured
     torque: a NaN is never published as if it were a value.
@@ -47,6 +78,7 @@ def outputs_of(estimate: Estimate) -> list[tuple[str, float]]:
     -------
     list of (str, float)
         (topic name from `OUTPUT_TOPICS`, value in SI).
+
     """
     out = [('expected_torque', estimate.expected_nm), ('friction_torque', estimate.friction_nm)]
     if math.isfinite(estimate.efficiency):
@@ -58,7 +90,8 @@ def outputs_of(estimate: Estimate) -> list[tuple[str, float]]:
 
 
 def stamp_to_ns(stamp: Any) -> int | None:
-    """Nanoseconds of a ``builtin_interfaces/Time``; None for an unset (zero) stamp.
+    """
+    Nanoseconds of a ``builtin_interfaces/Time``; None for an unset (zero) stamp.
 
     Parameters
     ----------
@@ -69,16 +102,21 @@ def stamp_to_ns(stamp: Any) -> int | None:
     -------
     int or None
         Time [ns], or None when the stamp is zero (the caller uses its clock instead).
+
     """
     ns = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
     return ns if ns != 0 else None
 
 
-def joint_sample(msg: Any, joint_name: str) -> tuple[float | None, float | None] | None:
-    """Speed (velocity) and torque (effort) of one joint of a ``sensor_msgs/JointState``.
+def joint_sample(msg: Any, joint_name: str) -> tuple[float | None, float | None, Defect]:
+    """
+    Speed (velocity) and torque (effort) of one joint of a ``sensor_msgs/JointState``.
 
     The joint is found by name in every message (drivers may reorder joints or publish
-    several). An empty or too short ``velocity`` / ``effort`` array means "not filled".
+    several). An empty ``velocity`` / ``effort`` array means "not filled"; an array that is
+    neither empty nor as long as ``name`` makes the message malformed (sensor_msgs says
+    all arrays have the size of ``name`` or are empty), and so does a message carrying
+    neither speed nor torque.
 
     Parameters
     ----------
@@ -89,21 +127,53 @@ def joint_sample(msg: Any, joint_name: str) -> tuple[float | None, float | None]
 
     Returns
     -------
-    tuple or None
-        (speed [rad/s] or None, torque [N m] or None); None when the joint is absent.
+    tuple
+        (speed [rad/s] or None, torque [N m] or None, `Defect`); the values are None
+        whenever the defect is not ``Defect.NONE``.
+
     """
     names = list(msg.name)
     if joint_name not in names:
-        return None
-    i = names.index(joint_name)
+        return None, None, Defect.MISSING_JOINT
+    i, n = names.index(joint_name), len(names)
     velocity, effort = msg.velocity, msg.effort
-    speed = float(velocity[i]) if len(velocity) > i else None
-    torque = float(effort[i]) if len(effort) > i else None
-    return speed, torque
+    if any(len(a) not in (0, n) for a in (msg.position, velocity, effort)):
+        return None, None, Defect.MALFORMED
+    speed = float(velocity[i]) if len(velocity) else None
+    torque = float(effort[i]) if len(effort) else None
+    if speed is None and torque is None:
+        return None, None, Defect.MALFORMED
+    return speed, torque, Defect.NONE
+
+
+def input_sample(spec: InputSpec, msg: Any, joint_name: str
+                 ) -> tuple[float | None, float | None, Defect]:
+    """
+    Return the sample one input message carries, in SI (what `TorqueEstimator.on_input` takes).
+
+    Parameters
+    ----------
+    spec : InputSpec
+        The input (``inputs.INPUTS``) the message arrived on.
+    msg : message
+        The message (rclpy's or rosbags').
+    joint_name : str
+        JointState: the pump shaft's joint.
+
+    Returns
+    -------
+    tuple
+        (value or None, torque [N m] or None, `Defect`).
+
+    """
+    if spec.value_field is None:
+        return joint_sample(msg, joint_name)
+    return float(getattr(msg, spec.value_field)), None, Defect.NONE
 
 
 def level_from_msg(level: Any) -> int:
-    """DiagnosticStatus level as an int, from rclpy (bytes) or rosbags (int).
+    """
+    Return the DiagnosticStatus level as an int, from rclpy (bytes) or rosbags (int).
 
     Parameters
     ----------
@@ -114,6 +184,7 @@ def level_from_msg(level: Any) -> int:
     -------
     int
         0 OK, 1 WARN, 2 ERROR, 3 STALE.
+
     """
     if isinstance(level, (bytes, bytearray)):
         return level[0]
@@ -121,7 +192,8 @@ def level_from_msg(level: Any) -> int:
 
 
 def level_to_msg(level: int, status_cls: Any) -> Any:
-    """DiagnosticStatus level in the representation of ``status_cls``.
+    """
+    Return the DiagnosticStatus level in the representation of ``status_cls``.
 
     rclpy's ``DiagnosticStatus`` holds its level constants as bytes (``bytes([1])``),
     rosbags' as ints; the class's own ``OK`` constant tells which.
@@ -137,6 +209,7 @@ def level_to_msg(level: int, status_cls: Any) -> Any:
     -------
     bytes or int
         The level for that class.
+
     """
     if not 0 <= level <= 3:
         raise ValueError(f'diagnostic level must be 0..3, got {level}')
@@ -175,9 +248,31 @@ def float64_message(types: MessageTypes, value: float) -> Any:
     return types.float64(data=float(value))
 
 
+def float64_cdr(value: float) -> bytes:
+    """
+    Return the CDR (little-endian) bytes of a ``std_msgs/Float64``.
+
+    What rosbags and the middleware serialise: the node publishes these bytes (rclpy's
+    ``Publisher.publish`` takes serialised bytes) and the replay writes them to its bag.
+
+    Parameters
+    ----------
+    value : float
+        The data field.
+
+    Returns
+    -------
+    bytes
+        Encapsulation header and the double.
+
+    """
+    return _CDR_LE + _DOUBLE.pack(value)
+
+
 def diagnostic_array(types: MessageTypes, snapshot: DiagnosticSnapshot, stamp_ns: int,
                      name: str, hardware_id: str) -> Any:
-    """``diagnostic_msgs/DiagnosticArray`` with one status for the pump.
+    """
+    ``diagnostic_msgs/DiagnosticArray`` with one status for the pump.
 
     Parameters
     ----------
@@ -196,6 +291,7 @@ def diagnostic_array(types: MessageTypes, snapshot: DiagnosticSnapshot, stamp_ns
     -------
     DiagnosticArray
         The message.
+
     """
     status = types.diagnostic_status(
         level=level_to_msg(snapshot.level, types.diagnostic_status), name=name,
@@ -203,4 +299,3 @@ def diagnostic_array(types: MessageTypes, snapshot: DiagnosticSnapshot, stamp_ns
         values=[types.key_value(key=k, value=v) for k, v in snapshot.values])
     header = types.header(stamp=stamp_msg(types, stamp_ns), frame_id='')
     return types.diagnostic_array(header=header, status=[status])
-

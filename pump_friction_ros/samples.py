@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from .bags import BagError
-from .config import EstimatorConfig
+from .config import BAG_PARAMS_FILE, EstimatorConfig
+from .errors import BagError
 from .params import load_pump
-from .simulate import DutyCycle, SimulatedRun, simulate_duty_cycle, wear_step
-from .table import cached_table
+from .simulate import DutyCycle, simulate_duty_cycle, SimulatedRun, wear_step
+from .table_io import cached_table
 
-__all__ = ['SAMPLE_BAGS', 'make_sample_bags', 'write_run']
+__all__ = ['SAMPLE_BAGS', 'SAMPLE_PARAMS_FILE', 'make_sample_bags', 'sample_params_text',
+           'write_run']
 
 SAMPLE_DURATION_S = 75.0
 WEAR_START_S, WEAR_RAMP_S, WEAR_SCALE = 25.0, 5.0, 1.6
@@ -26,7 +28,8 @@ JOINT_NAME = EstimatorConfig().joint_name
 
 def write_run(run: SimulatedRun, path: Path, storage: str, joint_name: str = JOINT_NAME,
               start_ns: int = 1_700_000_000 * 1_000_000_000, compress: bool = True) -> Path:
-    """Write a simulated run as a bag: JointState (speed, torque) and FluidPressure.
+    """
+    Write a simulated run as a bag: JointState (speed, torque) and FluidPressure.
 
     Both are stamped in their headers; the log time equals the stamp. Compressed with zstd
     (sqlite3: file compression; mcap: chunk compression) to keep the bag small.
@@ -50,9 +53,10 @@ def write_run(run: SimulatedRun, path: Path, storage: str, joint_name: str = JOI
     -------
     Path
         The bag.
+
     """
     from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
 
     ts = get_typestore(Stores.ROS2_JAZZY)
     t = ts.types
@@ -69,7 +73,7 @@ def write_run(run: SimulatedRun, path: Path, storage: str, joint_name: str = JOI
                     + [(int(ns), 1, i) for i, ns in enumerate(joint_ns)])
     empty = np.zeros(0)
 
-    def header(ns: int, frame: str):
+    def header(ns: int, frame: str) -> Any:  # a std_msgs/msg/Header of the typestore
         return header_t(stamp=time_t(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000),
                         frame_id=frame)
 
@@ -91,9 +95,52 @@ def write_run(run: SimulatedRun, path: Path, storage: str, joint_name: str = JOI
     return path
 
 
+SAMPLE_PARAMS_FILE = 'eha_params.yaml'
+
+
+def sample_params_text(cycle: DutyCycle, pump_file: str | None = None) -> str:
+    """
+    Return the node parameters of the simulated pump, as a ROS 2 params file.
+
+    The values the sample bags were simulated with that are not the node's defaults travel
+    with the bags (``bags/eha_params.yaml``): replay them with ``--params`` this file.
+
+    Parameters
+    ----------
+    cycle : DutyCycle
+        The simulation's settings (oil viscosity, drive loss, rotor inertia).
+    pump_file : str, optional
+        The pump file simulated, when not the default (written as an absolute path).
+
+    Returns
+    -------
+    str
+        The file's text.
+
+    """
+    lines = [
+        '# Node parameters of the pump simulated in the sample bags (pump_friction',
+        '# make-sample-bags, simulate.DutyCycle): give it after the defaults, e.g.',
+        '#   pump_friction replay bags/eha_nominal --params bags/eha_params.yaml',
+        '#   ros2 launch pump_friction_ros torque_estimator.launch.py params_file:=<this file>',
+        '/**/torque_estimator:',
+        '  ros__parameters:',
+    ]
+    if pump_file:
+        lines.append(f'    pump_file: {Path(pump_file).resolve()}')
+    lines += [
+        f'    oil_viscosity_m2_s: {cycle.viscosity_m2_s!r}  # the simulated oil '
+        f'({cycle.viscosity_m2_s * 1e6:g} cSt)',
+        f'    drive_loss_torque_nm: {cycle.drive_loss_torque_nm!r}  # the simulated drive loss',
+        f'    rotor_inertia_kg_m2: {cycle.rotor_inertia_kg_m2!r}  # the simulated rotor',
+    ]
+    return '\n'.join(lines) + '\n'
+
+
 def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None = None,
                      duration_s: float = SAMPLE_DURATION_S) -> list[Path]:
-    """Write ``eha_nominal`` (sqlite3) and ``eha_valve_plate_wear`` (mcap) into ``out_dir``.
+    """
+    Write ``eha_nominal`` (sqlite3) and ``eha_valve_plate_wear`` (mcap) into ``out_dir``.
 
     A positioning duty cycle with speed reversals and a load-following pressure, joint
     states at 1 kHz and pressure at 500 Hz; the measured torque is the model's (via the
@@ -114,10 +161,13 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
     Returns
     -------
     list of Path
-        The bags written.
+        The bags written; the node parameters of the simulated pump
+        (`sample_params_text`) are in each bag folder (``node_params.yaml``, read by the
+        replay) and beside them (``eha_params.yaml``, for ``ros2 launch ... params_file:=``).
+
     """
     out_dir = Path(out_dir)
-    targets = [out_dir / name for name in SAMPLE_BAGS]
+    targets = [out_dir / name for name in SAMPLE_BAGS] + [out_dir / SAMPLE_PARAMS_FILE]
     for target in targets:
         if target.exists():
             raise BagError(f'output exists: {target} (remove it or choose another --out)')
@@ -129,4 +179,7 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
         wear = wear_step(WEAR_START_S, WEAR_SCALE, WEAR_RAMP_S) if worn else None
         run = simulate_duty_cycle(table, cycle, seed=seed * 1000 + k, wear=wear)
         written.append(write_run(run, out_dir / name, storage))
+        # the simulated installation's parameters travel with each bag (BAG_PARAMS_FILE)
+        (out_dir / name / BAG_PARAMS_FILE).write_text(sample_params_text(cycle, pump_file))
+    (out_dir / SAMPLE_PARAMS_FILE).write_text(sample_params_text(cycle, pump_file))
     return written

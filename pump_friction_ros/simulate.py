@@ -1,4 +1,5 @@
-"""Synthetic EHA duty cycles: the test streams and the sample bags are made from these.
+"""
+Synthetic EHA duty cycles: the test streams and the sample bags are made from these.
 
 A positioning duty cycle: moves of random length and speed in both directions (trapezoidal
 speed with cosine-smoothed corners, reversals through zero, dwells), a load pressure that
@@ -10,13 +11,20 @@ acceleration + drive loss, plus white noise on every signal.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
+import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .friction import smooth_sign
+from .model import input_torque_nm, theoretical_torque_nm
 from .table import FrictionTable
+
+if TYPE_CHECKING:
+    from .estimate import Estimate
+    from .estimator import TorqueEstimator
 
 __all__ = ['DutyCycle', 'SimulatedRun', 'simulate_duty_cycle', 'wear_step']
 
@@ -60,7 +68,8 @@ class SimulatedRun:
 
 def wear_step(start_s: float, scale: float, ramp_s: float = 0.0
               ) -> Callable[[np.ndarray], np.ndarray]:
-    """Valve-plate friction factor: 1 before ``start_s``, ``scale`` after (optional ramp).
+    """
+    Valve-plate friction factor: 1 before ``start_s``, ``scale`` after (optional ramp).
 
     Parameters
     ----------
@@ -75,6 +84,7 @@ def wear_step(start_s: float, scale: float, ramp_s: float = 0.0
     -------
     callable
         Factor as a function of time [-].
+
     """
     def factor(t: np.ndarray) -> np.ndarray:
         if ramp_s <= 0.0:
@@ -84,9 +94,10 @@ def wear_step(start_s: float, scale: float, ramp_s: float = 0.0
     return factor
 
 
-def _speed_profile(cycle: DutyCycle, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def trapezoid_speed_profile(cycle: DutyCycle, t: np.ndarray, rng: np.random.Generator
+                            ) -> np.ndarray:
     """Trapezoidal moves with cosine-smoothed ramps, alternating mostly, with dwells."""
-    knots_t, knots_v = [0.0], [0.0]
+    t_knots, v_knots = [0.0], [0.0]
     now, direction = 0.0, 1.0
     while now < cycle.duration_s + 2.0:
         if rng.random() < 0.75:
@@ -97,9 +108,9 @@ def _speed_profile(cycle: DutyCycle, t: np.ndarray, rng: np.random.Generator) ->
         dwell = rng.uniform(*cycle.dwell_time_s)
         for dt, v in ((ramp, speed), (cruise, speed), (ramp, 0.0), (dwell, 0.0)):
             now += dt
-            knots_t.append(now)
-            knots_v.append(v)
-    knots_t, knots_v = np.array(knots_t), np.array(knots_v)
+            t_knots.append(now)
+            v_knots.append(v)
+    knots_t, knots_v = np.array(t_knots), np.array(v_knots)
     seg = np.clip(np.searchsorted(knots_t, t, side='right') - 1, 0, knots_t.size - 2)
     frac = (t - knots_t[seg]) / (knots_t[seg + 1] - knots_t[seg])
     smooth = 0.5 - 0.5 * np.cos(np.pi * frac)  # zero slope at both ends of each segment
@@ -109,7 +120,8 @@ def _speed_profile(cycle: DutyCycle, t: np.ndarray, rng: np.random.Generator) ->
 def simulate_duty_cycle(table: FrictionTable, cycle: DutyCycle | None = None, seed: int = 0,
                         wear: Callable[[np.ndarray], np.ndarray] | None = None
                         ) -> SimulatedRun:
-    """Simulate a duty cycle; the friction comes from ``table`` (vectorised lookup).
+    """
+    Simulate a duty cycle; the friction comes from ``table`` (vectorised lookup).
 
     Parameters
     ----------
@@ -126,11 +138,12 @@ def simulate_duty_cycle(table: FrictionTable, cycle: DutyCycle | None = None, se
     -------
     SimulatedRun
         The signals.
+
     """
     cycle = cycle or DutyCycle()
     rng = np.random.default_rng(seed)
     t = np.arange(0.0, cycle.duration_s, 1.0 / cycle.rate_hz)
-    speed = _speed_profile(cycle, t, rng)
+    speed = trapezoid_speed_profile(cycle, t, rng)
     accel = np.gradient(speed, t)
     lo, hi = cycle.load_pressure_pa
     phase = rng.uniform(0.0, 2.0 * math.pi)
@@ -141,12 +154,14 @@ def simulate_duty_cycle(table: FrictionTable, cycle: DutyCycle | None = None, se
         return static + cycle.damping_pa_per_rad_s * spd
 
     dp = load(t, speed)
-    res = table.lookup_array(speed, dp, cycle.viscosity_m2_s)
     scale = np.ones_like(t) if wear is None else np.asarray(wear(t), dtype=float)
-    direction = np.tanh(speed / table.zero_speed_threshold_rad_s)
-    torque = (res['input_nm'] + (scale - 1.0) * res['valve_plate_nm']
-              + cycle.rotor_inertia_kg_m2 * accel
-              + cycle.drive_loss_torque_nm * direction)
+    mags, _ = table.magnitudes_array(np.abs(speed), np.abs(dp), cycle.viscosity_m2_s,
+                                     speed * dp < 0.0)
+    mags[:, 0] *= scale  # valve-plate wear
+    direction = smooth_sign(speed, table.zero_speed_threshold_rad_s)
+    torque = (input_torque_nm(theoretical_torque_nm(table.displacement_m3, dp),
+                              mags.sum(axis=1), direction, cycle.drive_loss_torque_nm)
+              + cycle.rotor_inertia_kg_m2 * accel)
     tp = np.arange(0.0, cycle.duration_s, 1.0 / cycle.pressure_rate_hz)
     dp_meas = load(tp, np.interp(tp, t, speed))
     return SimulatedRun(
@@ -158,8 +173,9 @@ def simulate_duty_cycle(table: FrictionTable, cycle: DutyCycle | None = None, se
         pressure_diff_pa=dp_meas + rng.normal(0.0, cycle.pressure_noise_pa, tp.size))
 
 
-def feed(estimator, run: SimulatedRun) -> list:
-    """Feed a simulated run to a `TorqueEstimator` in time order, as a node would see it.
+def feed(estimator: TorqueEstimator, run: SimulatedRun) -> list[Estimate]:
+    """
+    Feed a simulated run to a `TorqueEstimator` in time order, as a node would see it.
 
     Pressure samples come before joint states of the same stamp; each joint state carries
     speed and torque.
@@ -175,6 +191,7 @@ def feed(estimator, run: SimulatedRun) -> list:
     -------
     list of Estimate
         Every estimate made, in order.
+
     """
     t_joint = np.round(run.t_s * 1e9).astype(np.int64)
     t_press = np.round(run.pressure_t_s * 1e9).astype(np.int64)
@@ -184,7 +201,7 @@ def feed(estimator, run: SimulatedRun) -> list:
     stamps = stamps.tolist()
     press = run.pressure_diff_pa.tolist()
     speed, torque = run.speed_rad_s.tolist(), run.torque_nm.tolist()
-    out = []
+    out: list[Estimate] = []
     for k in order:
         if k < n_press:
             estimator.on_pressure(stamps[k], press[k])

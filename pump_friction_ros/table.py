@@ -1,4 +1,5 @@
-"""Friction-torque table: precomputed from the model, persisted with provenance, fast lookup.
+"""
+Friction-torque table: precomputed from the model, persisted with provenance, fast lookup.
 
 Layout
 ------
@@ -11,29 +12,39 @@ The theoretical torque is not tabulated: it is V_g dp / (2 pi), analytic.
 Lookup is trilinear on non-uniform axes. Signs follow the model: the friction torque
 opposes the speed through tanh(speed / threshold), the same rule as ``model``. Outside the
 envelope the inputs are clamped to its edge and a flag says which axis was exceeded; NaN or
-inf in gives NaN out with the ``NOT_FINITE`` flag; nothing is extrapolated.
+inf in gives NaN out with the ``NOT_FINITE`` flag; nothing is extrapolated. Files and the
+cache are in ``table_io``.
+
+Longer than 500 lines because the grid, its two lookup paths (the scalar one of the
+estimator and the vectorised one) and the axis locator they share are one data structure
+whose private layout must be read together.
 """
 
 from __future__ import annotations
 
-import json
-import math
-import os
-import tempfile
-import time
 from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass
+import json
+import math
+import os
 from pathlib import Path
+import tempfile
+import time
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
-from . import MODEL_VERSION, __version__
+from . import __version__, MODEL_VERSION
 from .errors import TableError
+from .friction import smooth_sign, smooth_sign_scalar
 from .model import (
+    angle_count,
     COMPONENTS,
-    PumpModel,
     efficiency_of,
+    input_torque_nm,
+    PumpModel,
     theoretical_torque_nm,
     torque_efficiency,
 )
@@ -49,9 +60,7 @@ __all__ = [
     'FrictionTable',
     'TableSpec',
     'build_table',
-    'cached_table',
     'describe_flags',
-    'load_table',
 ]
 
 OK = 0
@@ -70,7 +79,8 @@ _ARRAYS = ('speed_axis_rad_s', 'pressure_axis_pa', 'viscosity_axis_m2_s', 'torqu
 
 
 def describe_flags(flags: int) -> str:
-    """Human-readable list of the lookup flags set in ``flags``.
+    """
+    Human-readable list of the lookup flags set in ``flags``.
 
     Parameters
     ----------
@@ -81,6 +91,7 @@ def describe_flags(flags: int) -> str:
     -------
     str
         Comma-separated descriptions, or ``'ok'``.
+
     """
     names = [text for bit, text in _FLAG_NAMES.items() if flags & bit]
     return ', '.join(names) if names else 'ok'
@@ -88,7 +99,8 @@ def describe_flags(flags: int) -> str:
 
 @dataclass(frozen=True)
 class TableSpec:
-    """Envelope and resolution of a friction table (SI).
+    """
+    Envelope and resolution of a friction table (SI).
 
     The default axes meet 0.5 % of the friction torque (or 1 mN m) against the full model
     anywhere inside the envelope (``test_table.py`` checks random points).
@@ -103,7 +115,7 @@ class TableSpec:
     high_speed_points: int = 36
     pressure_points: int = 16
     viscosity_points: int = 8
-    n_angles: int = 180
+    n_angles: int = 180  # at least; rounded up to a multiple of the piston count
 
     def __post_init__(self) -> None:
         checks = [
@@ -121,7 +133,8 @@ class TableSpec:
                 raise TableError(f'table spec: invalid {name}')
 
     def axes(self, params: PumpParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Grid axes: speed [rad/s], pressure difference [Pa], viscosity [m^2/s].
+        """
+        Grid axes: speed [rad/s], pressure difference [Pa], viscosity [m^2/s].
 
         Speed: 1 rad/s steps up to ``low_speed_rad_s`` (the valve plate's breakaway curve
         and the Palmgren viscous threshold, at nu n = 2000 cSt rpm, live there), every
@@ -139,6 +152,7 @@ class TableSpec:
         -------
         tuple of ndarray
             Strictly increasing axes.
+
         """
         low = np.arange(0.0, self.low_speed_rad_s + 0.5 * self.low_speed_step_rad_s,
                         self.low_speed_step_rad_s)
@@ -154,7 +168,8 @@ class TableSpec:
 
 
 class FrictionTable:
-    """A friction-torque table with its provenance; see the module docstring.
+    """
+    A friction-torque table with its provenance; see the module docstring.
 
     Parameters
     ----------
@@ -164,11 +179,12 @@ class FrictionTable:
         Component magnitudes [N*m]; first index 0 = pumping, 1 = motoring.
     metadata : dict
         Provenance (see `build_table`).
+
     """
 
     def __init__(self, speed_axis_rad_s: np.ndarray, pressure_axis_pa: np.ndarray,
                  viscosity_axis_m2_s: np.ndarray, torque_nm: np.ndarray,
-                 metadata: dict) -> None:
+                 metadata: dict[str, Any]) -> None:
         self.speed_axis_rad_s = np.asarray(speed_axis_rad_s, dtype=float)
         self.pressure_axis_pa = np.asarray(pressure_axis_pa, dtype=float)
         self.viscosity_axis_m2_s = np.asarray(viscosity_axis_m2_s, dtype=float)
@@ -177,7 +193,7 @@ class FrictionTable:
         _validate_arrays(self.speed_axis_rad_s, self.pressure_axis_pa, self.viscosity_axis_m2_s,
                          self.torque_nm, '<table>')
         ns, npr, nv = (a.size for a in (self.speed_axis_rad_s, self.pressure_axis_pa,
-                                         self.viscosity_axis_m2_s))
+                                        self.viscosity_axis_m2_s))
         # pure-Python copies for the scalar path
         self._s = self.speed_axis_rad_s.tolist()
         self._p = self.pressure_axis_pa.tolist()
@@ -211,7 +227,8 @@ class FrictionTable:
         return str(self.metadata['pump_sha256'])
 
     def check_matches(self, params: PumpParams) -> None:
-        """Refuse the table unless it was built from ``params`` by this model version.
+        """
+        Refuse the table unless it was built from ``params`` by this model version.
 
         Parameters
         ----------
@@ -222,6 +239,7 @@ class FrictionTable:
         ------
         TableError
             With the command that rebuilds the table.
+
         """
         source = self.metadata.get('source', '<table>')
         rebuild = (f'rebuild it: pump_friction build-table --pump {params.source or "PUMP.yaml"}'
@@ -239,7 +257,8 @@ class FrictionTable:
     # -- persistence ----------------------------------------------------------------------
 
     def save(self, path: str | Path) -> Path:
-        """Write the table to an ``.npz`` file atomically (temporary name, then rename).
+        """
+        Write the table to an ``.npz`` file atomically (temporary name, then rename).
 
         Parameters
         ----------
@@ -250,6 +269,7 @@ class FrictionTable:
         -------
         Path
             The file written.
+
         """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -271,7 +291,8 @@ class FrictionTable:
 
     def magnitudes(self, speed_abs_rad_s: float, pressure_abs_pa: float, viscosity_m2_s: float,
                    motoring: bool = False) -> tuple[tuple[float, float, float, float], int]:
-        """Component magnitudes at one point: the scalar path, pure Python.
+        """
+        Component magnitudes at one point: the scalar path, pure Python.
 
         Parameters
         ----------
@@ -289,6 +310,7 @@ class FrictionTable:
         tuple
             The four magnitudes [N*m] in ``COMPONENTS`` order (NaN if an input is not
             finite) and the lookup flags.
+
         """
         s, p, v = speed_abs_rad_s, pressure_abs_pa, viscosity_m2_s
         if not (math.isfinite(s) and math.isfinite(p) and math.isfinite(v)):
@@ -333,7 +355,8 @@ class FrictionTable:
 
     def lookup(self, speed_rad_s: float, pressure_diff_pa: float,
                viscosity_m2_s: float | None = None) -> TableTorque:
-        """Signed torques at one operating point (scalar path, no numpy).
+        """
+        Signed torques at one operating point (scalar path, no numpy).
 
         Parameters
         ----------
@@ -348,6 +371,7 @@ class FrictionTable:
         -------
         TableTorque
             Component and total torques [N*m], efficiency [-] and flags.
+
         """
         visc = self.default_viscosity_m2_s if viscosity_m2_s is None else viscosity_m2_s
         speed, dp = speed_rad_s, pressure_diff_pa
@@ -355,18 +379,21 @@ class FrictionTable:
         if flags & NOT_FINITE:
             nan = math.nan
             return TableTorque(nan, (nan, nan, nan, nan), nan, nan, nan, flags)
-        direction = math.tanh(speed / self.zero_speed_threshold_rad_s)
-        comps = tuple(direction * m for m in mags)
+        direction = smooth_sign_scalar(speed, self.zero_speed_threshold_rad_s)
+        comps = (direction * mags[0], direction * mags[1], direction * mags[2],
+                 direction * mags[3])
         friction = comps[0] + comps[1] + comps[2] + comps[3]
-        theoretical = self.displacement_m3 * dp / (2.0 * math.pi)
-        tin = theoretical + friction
+        theoretical = theoretical_torque_nm(self.displacement_m3, dp)
+        tin = input_torque_nm(theoretical, mags[0] + mags[1] + mags[2] + mags[3], direction)
         eff = efficiency_of(theoretical, tin, speed, dp, self.efficiency_min_speed_rad_s,
                             self.efficiency_min_pressure_pa)
         return TableTorque(theoretical, comps, friction, tin, eff, flags)
 
-    def magnitudes_array(self, speed_abs_rad_s, pressure_abs_pa, viscosity_m2_s,
-                         motoring=False) -> tuple[np.ndarray, np.ndarray]:
-        """Component magnitudes at many points: the vectorised path.
+    def magnitudes_array(self, speed_abs_rad_s: ArrayLike, pressure_abs_pa: ArrayLike,
+                         viscosity_m2_s: ArrayLike, motoring: ArrayLike = False
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """
+        Component magnitudes at many points: the vectorised path.
 
         Parameters
         ----------
@@ -380,6 +407,7 @@ class FrictionTable:
         tuple of ndarray
             Magnitudes, shape (n, 4) [N*m] (NaN rows where an input is not finite), and
             flags, shape (n,).
+
         """
         s, p, v, mot = (np.ravel(a) for a in np.broadcast_arrays(
             np.asarray(speed_abs_rad_s, dtype=float), np.asarray(pressure_abs_pa, dtype=float),
@@ -391,7 +419,8 @@ class FrictionTable:
             self._interpolate(s[part], p[part], v[part], mot[part], out[part], flags[part])
         return out, flags
 
-    def _interpolate(self, s, p, v, mot, out, flags) -> None:
+    def _interpolate(self, s: np.ndarray, p: np.ndarray, v: np.ndarray, mot: np.ndarray,
+                     out: np.ndarray, flags: np.ndarray) -> None:
         finite = np.isfinite(s) & np.isfinite(p) & np.isfinite(v)
         all_finite = bool(finite.all())
         flags[:] = 0 if all_finite else np.where(finite, 0, NOT_FINITE)
@@ -421,8 +450,10 @@ class FrictionTable:
         if not all_finite:
             out[~finite] = np.nan
 
-    def lookup_array(self, speed_rad_s, pressure_diff_pa, viscosity_m2_s=None) -> dict:
-        """Signed torques at many operating points (vectorised path).
+    def lookup_array(self, speed_rad_s: ArrayLike, pressure_diff_pa: ArrayLike,
+                     viscosity_m2_s: ArrayLike | None = None) -> dict[str, np.ndarray]:
+        """
+        Signed torques at many operating points (vectorised path).
 
         Parameters
         ----------
@@ -436,18 +467,20 @@ class FrictionTable:
         dict of ndarray
             ``theoretical_nm``, ``<component>_nm``, ``friction_nm``, ``input_nm``,
             ``efficiency`` and ``flags``, each of shape (n,).
+
         """
         visc = self.default_viscosity_m2_s if viscosity_m2_s is None else viscosity_m2_s
         speed, dp, visc = (np.ravel(a) for a in np.broadcast_arrays(
             np.asarray(speed_rad_s, dtype=float), np.asarray(pressure_diff_pa, dtype=float),
             np.asarray(visc, dtype=float)))
         mags, flags = self.magnitudes_array(np.abs(speed), np.abs(dp), visc, speed * dp < 0.0)
-        direction = np.tanh(speed / self.zero_speed_threshold_rad_s)
+        direction = smooth_sign(speed, self.zero_speed_threshold_rad_s)
         result = {'theoretical_nm': theoretical_torque_nm(self.displacement_m3, dp)}
         for c, name in enumerate(COMPONENTS):
             result[f'{name}_nm'] = direction * mags[:, c]
         result['friction_nm'] = direction * mags.sum(axis=1)
-        result['input_nm'] = result['theoretical_nm'] + result['friction_nm']
+        result['input_nm'] = input_torque_nm(result['theoretical_nm'], mags.sum(axis=1),
+                                             direction)
         result['efficiency'] = torque_efficiency(
             result['theoretical_nm'], result['input_nm'], speed, dp,
             self.efficiency_min_speed_rad_s, self.efficiency_min_pressure_pa)
@@ -456,7 +489,8 @@ class FrictionTable:
 
 
 class _AxisLocator:
-    """Cell index and local coordinate on a non-uniform axis, faster than searchsorted.
+    """
+    Cell index and local coordinate on a non-uniform axis, faster than searchsorted.
 
     Uniform buckets no wider than the axis' smallest step (up to 2**20 of them) each point
     to the last node at or below the bucket's start; one or two vectorised compares fix
@@ -480,7 +514,7 @@ class _AxisLocator:
         self._upper[n - 2] = np.inf  # the last cell also takes x == axis[-1]
         self._inv_step = 1.0 / np.diff(axis)
 
-    def __call__(self, x: np.ndarray):
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """Return (index, local coordinate in [0, 1], clamped mask or None)."""
         axis = self.axis
         low, high = x < axis[0], x > axis[-1]
@@ -511,7 +545,8 @@ class TableTorque:
 
 def build_table(params: PumpParams, spec: TableSpec | None = None,
                 progress: Callable[[float], None] | None = None) -> FrictionTable:
-    """Evaluate the full model on the table grid.
+    """
+    Evaluate the full model on the table grid.
 
     Parameters
     ----------
@@ -527,9 +562,10 @@ def build_table(params: PumpParams, spec: TableSpec | None = None,
     FrictionTable
         The table, with metadata: axes and units, component names, pump name and hash,
         model and package versions, creation time, build settings.
+
     """
     spec = spec or TableSpec()
-    model = PumpModel(params, n_angles=spec.n_angles)
+    model = PumpModel(params, n_angles=angle_count(params.geometry.n_pistons, spec.n_angles))
     speed, pressure, viscosity = spec.axes(params)
     grid = np.stack(np.meshgrid(speed, pressure, viscosity, indexing='ij'), axis=-1)
     flat = grid.reshape(-1, 3)
@@ -561,7 +597,7 @@ def build_table(params: PumpParams, spec: TableSpec | None = None,
         'package_version': __version__,
         'created_utc': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
         'build_seconds': round(time.perf_counter() - started, 3),
-        'n_angles': spec.n_angles,
+        'n_angles': model.n_angles,
         'displacement_m3': params.geometry.displacement_m3,
         'zero_speed_threshold_rad_s': params.operation.zero_speed_threshold_rad_s,
         'efficiency_min_speed_rad_s': params.operation.efficiency_min_speed_rad_s,
@@ -573,7 +609,8 @@ def build_table(params: PumpParams, spec: TableSpec | None = None,
 
 
 def _curve_kink_speeds(params: PumpParams) -> list[float]:
-    """Shaft speeds [rad/s] at which joint or head sliding speeds cross a curve abscissa.
+    """
+    Shaft speeds [rad/s] at which joint or head sliding speeds cross a curve abscissa.
 
     Over a revolution the sliding speed per unit shaft speed ranges between a minimum and
     a maximum, so each kink of a friction curve is smeared over a band of shaft speeds;
@@ -598,7 +635,8 @@ def _curve_kink_speeds(params: PumpParams) -> list[float]:
     return speeds
 
 
-def _validate_arrays(speed, pressure, viscosity, torque, where: str) -> None:
+def _validate_arrays(speed: np.ndarray, pressure: np.ndarray, viscosity: np.ndarray,
+                     torque: np.ndarray, where: str) -> None:
     for name, axis in (('speed_axis_rad_s', speed), ('pressure_axis_pa', pressure),
                        ('viscosity_axis_m2_s', viscosity)):
         if axis.ndim != 1 or axis.size < 2 or not np.all(np.isfinite(axis)) \
@@ -611,111 +649,3 @@ def _validate_arrays(speed, pressure, viscosity, torque, where: str) -> None:
         raise TableError(f'{where}: torque_nm has shape {torque.shape}, expected {expected}')
     if not np.all(np.isfinite(torque)) or np.any(torque < 0.0):
         raise TableError(f'{where}: torque_nm must hold finite, non-negative magnitudes')
-
-
-def load_table(path: str | Path, params: PumpParams | None = None) -> FrictionTable:
-    """Load a table file, check every array, and (given ``params``) its provenance.
-
-    Parameters
-    ----------
-    path : str or Path
-        ``.npz`` file written by `FrictionTable.save`.
-    params : PumpParams, optional
-        The pump in use: the table is refused unless built from it.
-
-    Returns
-    -------
-    FrictionTable
-        The table.
-
-    Raises
-    ------
-    TableError
-        Missing or unreadable file, wrong arrays, or a pump / model mismatch.
-    """
-    path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            missing = [name for name in _ARRAYS if name not in data.files]
-            if missing:
-                raise TableError(f'{path}: not a friction table (missing {", ".join(missing)})')
-            arrays = {name: data[name] for name in _ARRAYS}
-    except FileNotFoundError:
-        raise TableError(f'table file not found: {path}') from None
-    except TableError:
-        raise
-    except Exception as exc:  # zipfile.BadZipFile, ValueError, OSError, EOFError ...
-        raise TableError(f'{path}: cannot read table ({type(exc).__name__}: {exc})') from None
-    for name in _ARRAYS[:4]:
-        if arrays[name].dtype != np.float64:
-            raise TableError(f'{path}: {name} has dtype {arrays[name].dtype}, expected float64')
-    meta = arrays['metadata']
-    if meta.shape != () or meta.dtype.kind != 'U':
-        raise TableError(f'{path}: metadata must be a JSON string')
-    try:
-        metadata = json.loads(str(meta))
-    except json.JSONDecodeError as exc:
-        raise TableError(f'{path}: metadata is not valid JSON ({exc})') from None
-    if not isinstance(metadata, dict) or metadata.get('format') != TABLE_FORMAT \
-            or metadata.get('components') != list(COMPONENTS):
-        raise TableError(f'{path}: unsupported table format or components')
-    needed = ('pump_sha256', 'model_version', 'displacement_m3', 'zero_speed_threshold_rad_s',
-              'efficiency_min_speed_rad_s', 'efficiency_min_pressure_pa',
-              'default_viscosity_m2_s')
-    absent = [k for k in needed if k not in metadata]
-    if absent:
-        raise TableError(f'{path}: metadata lacks {", ".join(absent)}')
-    _validate_arrays(arrays['speed_axis_rad_s'], arrays['pressure_axis_pa'],
-                     arrays['viscosity_axis_m2_s'], arrays['torque_nm'], str(path))
-    metadata['source'] = str(path)
-    table = FrictionTable(arrays['speed_axis_rad_s'], arrays['pressure_axis_pa'],
-                          arrays['viscosity_axis_m2_s'], arrays['torque_nm'], metadata)
-    if params is not None:
-        table.check_matches(params)
-    return table
-
-
-def cache_dir() -> Path:
-    """Folder of tables built on first use: ``$XDG_CACHE_HOME/pump_friction_ros``.
-
-    Returns
-    -------
-    Path
-        The cache folder (``~/.cache/pump_friction_ros`` by default).
-    """
-    root = os.environ.get('XDG_CACHE_HOME') or Path.home() / '.cache'
-    return Path(root) / 'pump_friction_ros'
-
-
-def cached_table(params: PumpParams, progress: Callable[[float], None] | None = None
-                 ) -> FrictionTable:
-    """Return the default table for ``params``: from the cache, or built and cached.
-
-    The file name holds the pump name, its parameter hash and the model version, so a
-    changed pump file or model never meets a stale table.
-
-    Parameters
-    ----------
-    params : PumpParams
-        The pump.
-    progress : callable, optional
-        Build progress callback (fraction done), used only when building.
-
-    Returns
-    -------
-    FrictionTable
-        The table.
-    """
-    path = cache_dir() / f'{params.name}-{params.sha256[:16]}-m{MODEL_VERSION}.npz'
-    if path.exists():
-        try:
-            return load_table(path, params)
-        except TableError:
-            pass  # corrupt or foreign cache entry: rebuild it below
-    table = build_table(params, progress=progress)
-    table.metadata['source'] = str(path)
-    try:
-        table.save(path)
-    except OSError:
-        pass  # read-only home: the table still works, it is just not cached
-    return table

@@ -1,6 +1,9 @@
 """Unit conversions between SI (used everywhere inside) and the paper's units (edges only)."""
 
 import math
+from typing import TypeVar
+
+import numpy as np
 
 RPM_TO_RAD_S = 2.0 * math.pi / 60.0
 """Multiply a speed in rpm by this to get rad/s."""
@@ -23,9 +26,12 @@ CC_TO_M3 = 1.0e-6
 NMM_TO_NM = 1.0e-3
 """Multiply a torque in N*mm by this to get N*m."""
 
+_Quantity = TypeVar('_Quantity', float, np.ndarray)  # the conversions keep the type
 
-def rpm_to_rad_s(speed_rpm):
-    """Convert a shaft speed from rpm to rad/s.
+
+def rpm_to_rad_s(speed_rpm: _Quantity) -> _Quantity:
+    """
+    Convert a shaft speed from rpm to rad/s.
 
     Parameters
     ----------
@@ -36,12 +42,14 @@ def rpm_to_rad_s(speed_rpm):
     -------
     float or ndarray
         Shaft speed [rad/s].
+
     """
     return speed_rpm * RPM_TO_RAD_S
 
 
-def rad_s_to_rpm(speed_rad_s):
-    """Convert a shaft speed from rad/s to rpm.
+def rad_s_to_rpm(speed_rad_s: _Quantity) -> _Quantity:
+    """
+    Convert a shaft speed from rad/s to rpm.
 
     Parameters
     ----------
@@ -52,12 +60,14 @@ def rad_s_to_rpm(speed_rad_s):
     -------
     float or ndarray
         Shaft speed [rpm].
+
     """
     return speed_rad_s / RPM_TO_RAD_S
 
 
-def bar_to_pa(pressure_bar):
-    """Convert a pressure from bar to Pa.
+def bar_to_pa(pressure_bar: _Quantity) -> _Quantity:
+    """
+    Convert a pressure from bar to Pa.
 
     Parameters
     ----------
@@ -68,12 +78,14 @@ def bar_to_pa(pressure_bar):
     -------
     float or ndarray
         Pressure [Pa].
+
     """
     return pressure_bar * BAR_TO_PA
 
 
-def pa_to_bar(pressure_pa):
-    """Convert a pressure from Pa to bar.
+def pa_to_bar(pressure_pa: _Quantity) -> _Quantity:
+    """
+    Convert a pressure from Pa to bar.
 
     Parameters
     ----------
@@ -84,12 +96,14 @@ def pa_to_bar(pressure_pa):
     -------
     float or ndarray
         Pressure [bar].
+
     """
     return pressure_pa / BAR_TO_PA
 
 
-def cst_to_m2_s(viscosity_cst):
-    """Convert a kinematic viscosity from cSt to m^2/s.
+def cst_to_m2_s(viscosity_cst: _Quantity) -> _Quantity:
+    """
+    Convert a kinematic viscosity from cSt to m^2/s.
 
     Parameters
     ----------
@@ -100,12 +114,14 @@ def cst_to_m2_s(viscosity_cst):
     -------
     float or ndarray
         Kinematic viscosity [m^2/s].
+
     """
     return viscosity_cst / CST_PER_M2_S
 
 
-def m2_s_to_cst(viscosity_m2_s):
-    """Convert a kinematic viscosity from m^2/s to cSt.
+def m2_s_to_cst(viscosity_m2_s: _Quantity) -> _Quantity:
+    """
+    Convert a kinematic viscosity from m^2/s to cSt.
 
     Parameters
     ----------
@@ -116,5 +132,6 @@ def m2_s_to_cst(viscosity_m2_s):
     -------
     float or ndarray
         Kinematic viscosity [cSt].
+
     """
     return viscosity_m2_s * CST_PER_M2_S

@@ -2,10 +2,9 @@
 
 from pathlib import Path
 
-import pytest
-
 from pump_friction_ros.model import PumpModel
 from pump_friction_ros.params import load_pump
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 PAPER_PUMP = REPO / 'config' / 'pumps' / 'hong_doh_2004.yaml'

@@ -1,4 +1,5 @@
-"""The ament linter trio (flake8, pep257, copyright), where ament is installed (a ROS shell).
+"""
+The ament linter trio (flake8, pep257, copyright), where ament is installed (a ROS shell).
 
 The checks are the ament_python template's, with a skip instead of an import error when the
 ament linters are not installed; ruff (test_lint.py) covers the same ground everywhere.

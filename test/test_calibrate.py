@@ -5,11 +5,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pytest
-
-from pump_friction_ros.calibrate import (
-    CalibrationError,
+from pump_friction_ros.calibration import (
     calibrate,
+    CalibrationError,
     correlation_time,
     fitted_pump,
 )
@@ -17,11 +15,14 @@ from pump_friction_ros.cli import main
 from pump_friction_ros.config import load_estimator_config
 from pump_friction_ros.model import PumpModel
 from pump_friction_ros.params import load_pump
-from pump_friction_ros.table import cached_table
+from pump_friction_ros.table_io import cached_table
+import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 BASE = REPO / 'config' / 'pumps' / 'hong_doh_2004.yaml'
-CONFIG = load_estimator_config(REPO / 'config' / 'torque_estimator.yaml')
+# the shipped defaults, then what the sample bags' simulated pump brings with them
+SAMPLE_PARAMS = REPO / 'bags' / 'eha_params.yaml'
+CONFIG = load_estimator_config([REPO / 'config' / 'torque_estimator.yaml', SAMPLE_PARAMS])
 NOISE_NM = 0.02
 
 
@@ -59,6 +60,32 @@ def test_fit_recovers_known_parameters_within_their_intervals(tmp_path):
     assert result.rmse_after_nm < 0.25 * result.rmse_before_nm
 
 
+def test_fit_survives_a_solver_that_writes_into_its_jacobian(tmp_path, monkeypatch):
+    # SciPy < 1.16 (Jazzy: 1.11) scales the array a `jac` callable returns in place when the
+    # loss is robust; simulate that on any SciPy: the fit must not depend on it
+    import scipy.optimize
+    real = scipy.optimize.least_squares
+
+    def least_squares_before_1_16(fun, x0, jac='2-point', **kwargs):
+        if callable(jac):
+            user_jac = jac
+
+            def jac(theta):
+                returned = user_jac(theta)
+                solver_copy = np.array(returned, dtype=float)
+                returned *= 0.5  # what the old solver did to the caller's array
+                return solver_copy
+        return real(fun, x0, jac=jac, **kwargs)
+
+    monkeypatch.setattr(scipy.optimize, 'least_squares', least_squares_before_1_16)
+    truth = fitted_pump(load_pump(BASE), TRUTH, 'truth')
+    data = write_bench(tmp_path / 'bench.csv', truth, [100, 130, 160, 200, 500, 2000, 9000],
+                       np.linspace(20, 300, 6))
+    result = calibrate([data], BASE, None, fix=['piston_friction.joint', 'piston_friction.head'])
+    for k, p in enumerate(result.parameters[:4]):
+        assert p.status == 'fitted' and abs(p.fitted - TRUTH[k]) <= p.ci95, p
+
+
 def test_one_speed_cannot_separate_coulomb_from_viscous_and_says_so(tmp_path):
     base = load_pump(BASE)
     truth = fitted_pump(base, TRUTH, 'truth')
@@ -89,7 +116,7 @@ def test_nominal_sample_bag_is_consistent_with_the_papers_pump(tmp_path, monkeyp
 
 
 def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_path,
-                                                                       monkeypatch):
+                                                                         monkeypatch):
     monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path / 'cache'))
     base = load_pump(BASE)
     data = write_bench(tmp_path / 'b.csv', fitted_pump(base, TRUTH, 't'),
@@ -108,8 +135,8 @@ def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_pat
     assert table.pump_sha256 == pump.sha256
     assert sorted(p.name for p in (tmp_path / 'report').glob('*.png')) == [
         'residual.png', 'torque_vs_pressure.png', 'torque_vs_speed.png']
+    from pump_friction_ros.bags.replay import replay_bag
     from pump_friction_ros.config import EstimatorConfig
-    from pump_friction_ros.replay import replay_bag
     summary = replay_bag(REPO / 'bags' / 'eha_nominal',
                          EstimatorConfig(pump_file=str(out), oil_viscosity_m2_s=46e-6))
     assert summary.estimates == 75000
@@ -144,6 +171,18 @@ def test_cli_exits_2_with_one_line_on_bad_arguments(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith('pump_friction: error: ') and err.count('\n') == 1
     assert not (tmp_path / 'o.yaml').exists()
+
+
+def test_cli_says_in_one_line_that_ruamel_yaml_is_needed(tmp_path, capsys, monkeypatch):
+    import sys
+    data = write_bench(tmp_path / 'b.csv', load_pump(BASE), [300, 1000, 3000, 9000], [50, 250])
+    monkeypatch.setitem(sys.modules, 'ruamel', None)  # as if not installed
+    monkeypatch.setitem(sys.modules, 'ruamel.yaml', None)
+    out = tmp_path / 'o.yaml'
+    assert main(['calibrate', str(data), '--pump', str(BASE), '--out', str(out)]) == 2
+    assert capsys.readouterr().err == ('pump_friction: error: writing a calibrated pump file '
+                                       'needs ruamel.yaml: pip install ruamel.yaml\n')
+    assert not out.exists() and not list(tmp_path.glob('o.yaml*'))
 
 
 def test_correlation_time_is_one_for_white_noise_and_grows_with_smoothing():

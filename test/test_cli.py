@@ -2,12 +2,11 @@
 
 import json
 import math
-import struct
 from pathlib import Path
-
-import pytest
+import struct
 
 from pump_friction_ros.cli import main
+import pytest
 
 TORQUE_KEYS = ['theoretical_nm', 'valve_plate_nm', 'bearing_nm', 'spherical_joints_nm',
                'piston_heads_nm', 'friction_nm', 'input_nm', 'efficiency']
@@ -91,6 +90,9 @@ def test_paper_check_prints_the_table_and_exits_zero(capsys):
     ['kinematics', '--speed-rpm', '100', '--pump', '/no/such/pump.yaml'],
     ['frobnicate'],
     [],
+    ['torque', '--speed', '100', '--pressure-bar', '100'],  # abbreviations are typos
+    ['replay', 'bags/eha_nominal', '--plot', 'figs'],
+    ['build-table', '--max-speed', '3000'],
 ])
 def test_bad_arguments_exit_2_with_one_line_and_no_traceback(capsys, argv):
     code, out, err = run(capsys, *argv)
@@ -99,6 +101,14 @@ def test_bad_arguments_exit_2_with_one_line_and_no_traceback(capsys, argv):
     assert len(err.strip().splitlines()) == 1
     assert err.startswith('pump_friction: error: ')
     assert 'Traceback' not in err
+
+
+def test_every_parser_refuses_abbreviations():
+    from pump_friction_ros.cli import build_parser
+    parser = build_parser()
+    subs = next(a for a in parser._actions if a.dest == 'command').choices
+    assert parser.allow_abbrev is False
+    assert subs and all(p.allow_abbrev is False for p in subs.values())
 
 
 def test_invalid_pump_yaml_exits_2(capsys, tmp_path):

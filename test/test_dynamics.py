@@ -3,11 +3,10 @@
 import dataclasses
 
 import numpy as np
-import pytest
-
 from pump_friction_ros.dynamics import joint_angular_velocity_per_speed, solve_piston_loads
 from pump_friction_ros.params import Curve
 from pump_friction_ros.pressure import chamber_pressure
+import pytest
 
 AREA = np.pi / 4 * 9.5e-3**2  # Table 1 bore
 
@@ -72,7 +71,7 @@ def _shaft_torque_balance(params, kin, speed, dp):
 
 
 @pytest.mark.parametrize(('speed', 'dp'), [(1047.2, 300e5), (300.0, 100e5), (-500.0, 200e5),
-                                          (700.0, -250e5)])
+                                           (700.0, -250e5)])
 def test_shaft_power_equals_fluid_power_plus_dissipation(consistent_model, speed, dp):
     """Conservation: direct moments on flange and barrel vs work-energy, per piston."""
     direct, energy, dissipated = _shaft_torque_balance(consistent_model.params,

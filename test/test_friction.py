@@ -4,8 +4,6 @@ import dataclasses
 import math
 
 import numpy as np
-import pytest
-
 from pump_friction_ros.friction import (
     barrel_effective_area_m2,
     bearing_torque_nm,
@@ -13,6 +11,7 @@ from pump_friction_ros.friction import (
     smooth_sign,
     valve_plate_viscous_torque_nm,
 )
+import pytest
 
 
 def test_barrel_effective_area_matches_eq9_by_hand(paper_params):

@@ -1,9 +1,8 @@
 """Kinematics (eqs. 1, 2, 8) against the geometry's closed forms and numerical derivatives."""
 
 import numpy as np
-import pytest
-
 from pump_friction_ros.kinematics import head_position, joint_position, piston_kinematics
+import pytest
 
 # Fig. 2(a) / Table 1, typed in from the paper (not read from the code's parameter file)
 R_S, DELTA = 10.75e-3, np.radians(40.0)

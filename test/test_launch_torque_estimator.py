@@ -1,13 +1,14 @@
-"""launch_testing: the node starts from its parameters file, answers, and shuts down cleanly.
+"""
+launch_testing: the node starts from its parameters file, answers, and shuts down cleanly.
 
 Needs a sourced ROS 2 Jazzy (launch_testing, rclpy); skipped with the reason otherwise.
 """
 
 import os
+from pathlib import Path
 import sys
 import time
 import unittest
-from pathlib import Path
 
 import pytest
 
@@ -15,21 +16,25 @@ pytest.importorskip('launch_testing',
                     reason='launch_testing is not importable: source ROS 2 Jazzy')
 rclpy = pytest.importorskip('rclpy', reason='rclpy is not importable: source ROS 2 Jazzy')
 
+# Imports that need a sourced ROS 2, after the skip above; flake8-import-order compares
+# them with 'import pytest' across the code in between, hence I100.
+from builtin_interfaces.msg import Time  # noqa: E402, I100
+import launch  # noqa: E402
 import launch_testing  # noqa: E402
 import launch_testing.actions  # noqa: E402
 import launch_testing.asserts  # noqa: E402
-from builtin_interfaces.msg import Time  # noqa: E402
 from sensor_msgs.msg import FluidPressure, JointState  # noqa: E402
 from std_msgs.msg import Float64, Header  # noqa: E402
-
-import launch  # noqa: E402
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml'
 
 
 @pytest.mark.launch_test
 def generate_test_description():
-    env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='1', RCUTILS_LOGGING_BUFFERED_STREAM='1',
+    # The node's start-up line comes from its rclpy logger, which rcutils writes to stderr
+    # (RCUTILS_LOGGING_USE_STDOUT 0 or unset), unbuffered with RCUTILS_LOGGING_BUFFERED_STREAM
+    # 0 (1 would ask for line buffering): pinned here whatever the calling shell has set.
+    env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='0', RCUTILS_LOGGING_BUFFERED_STREAM='0',
                PYTHONUNBUFFERED='1')
     node = launch.actions.ExecuteProcess(
         cmd=[sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
@@ -39,13 +44,19 @@ def generate_test_description():
         'estimator': node}
 
 
+STARTED = 'pump hong_doh_2004'  # in the node's first log line (rclpy logger, on stderr)
+
+
 class TestTorqueEstimatorRuns(unittest.TestCase):
 
+    # launch_testing 3.4.3 (io_handler.py, ActiveIoHandler.waitFor): stream='stderr' is the
+    # default; it is spelled out because the stream must be the one the logger writes to.
+
     def test_starts_with_the_papers_pump(self, proc_output, estimator):
-        proc_output.assertWaitFor('pump hong_doh_2004', process=estimator, timeout=60)
+        proc_output.assertWaitFor(STARTED, process=estimator, timeout=60, stream='stderr')
 
     def test_answers_joint_states_with_an_expected_torque(self, proc_output, estimator):
-        proc_output.assertWaitFor('pump hong_doh_2004', process=estimator, timeout=60)
+        proc_output.assertWaitFor(STARTED, process=estimator, timeout=60, stream='stderr')
         rclpy.init()
         node = rclpy.create_node('launch_probe')
         got = []

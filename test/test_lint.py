@@ -1,9 +1,9 @@
 """Code style: ruff (pycodestyle, pyflakes, numpydoc docstrings) over the whole package."""
 
 import importlib.util
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 

@@ -3,12 +3,11 @@
 import math
 
 import numpy as np
-import pytest
-
 from pump_friction_ros.dynamics import solve_piston_loads
 from pump_friction_ros.kinematics import piston_kinematics
 from pump_friction_ros.model import COMPONENTS, PumpModel
 from pump_friction_ros.pressure import chamber_pressure
+import pytest
 
 RPM = math.pi / 30
 
@@ -21,7 +20,8 @@ def test_theoretical_torque_is_displacement_times_pressure_over_two_pi(paper_mod
 
 
 def test_mean_pressure_torque_over_a_revolution_is_close_to_theoretical(paper_model):
-    """Kinematic torque sum_i p_i A_p ds_i/dphi averages to V_g dp / 2 pi.
+    """
+    Kinematic torque sum_i p_i A_p ds_i/dphi averages to V_g dp / 2 pi.
 
     Less the small pre-compression loss over the bridges.
     """
@@ -166,3 +166,92 @@ def test_mean_only_path_equals_the_mean_of_the_waveforms(paper_model):
     for c in COMPONENTS:
         np.testing.assert_allclose(fast.magnitudes_nm[c], getattr(wf, f'{c}_nm').mean(axis=1),
                                    rtol=1e-12)
+
+
+# -- any piston count (issue 11): 5, 7 and 9 pistons against the classic ripple formula -----
+
+def pump_with(paper_raw, n, bore_pitch_radius_m=None, bore_diameter_m=None,
+              narrow_ports=False):
+    """
+    Return the paper pump redrawn with ``n`` pistons (validated like a pump file).
+
+    ``narrow_ports`` shrinks the bridges to 0.6 deg, so that chambers switch pressure at the
+    dead centres as the closed-form ripple assumes.
+    """
+    import copy
+
+    from pump_friction_ros.params import pump_from_mapping
+
+    raw = copy.deepcopy(paper_raw)
+    g = raw['geometry']
+    g['n_pistons'] = n
+    if bore_pitch_radius_m is not None:
+        g['bore_pitch_radius_m'] = bore_pitch_radius_m
+    if bore_diameter_m is not None:
+        g['bore_diameter_m'] = bore_diameter_m
+    if narrow_ports:
+        raw['valve_plate'].update(port_inner_radius_m=9.45e-3, port_outer_radius_m=9.55e-3)
+    return pump_from_mapping(raw, f'{n} pistons')
+
+
+@pytest.fixture(scope='module')
+def paper_raw():
+    import yaml
+
+    from .conftest import PAPER_PUMP
+    return yaml.safe_load(PAPER_PUMP.read_text())
+
+
+def ripple(model, speed=1000.0, dp=200e5):
+    res = model.evaluate(speed, dp, waveforms=True)
+    torque = res.waveforms.pressure_torque_nm[0]
+    return res, (torque.max() - torque.min()) / torque.mean(), torque.mean()
+
+
+@pytest.mark.parametrize('n', [5, 6, 7, 9])
+def test_any_piston_count_follows_the_closed_form_ripple_and_mean(paper_raw, n):
+    """
+    Ideal switching: (max - min) / mean = pi/(2N) tan(pi/(4N)) for odd N, pi/N tan(pi/(2N)).
+
+    The paper's barrel (R_C = R_S (1 + cos delta) / 2: near-sinusoidal strokes), with
+    bores as wide as fit on its pitch circle (at most the paper's 9.5 mm).
+    """
+    r_c, r_s, delta = 9.5e-3, 10.75e-3, math.radians(40.0)
+    d = min(9.5e-3, 0.9 * 2 * r_c * math.sin(math.pi / n))
+    model = PumpModel(pump_with(paper_raw, n, bore_diameter_m=d, narrow_ports=True))
+    assert model.n_angles % n == 0 and model.n_angles >= 360  # the default angle grid
+    res, got, mean = ripple(model)
+    closed = (math.pi / (2 * n) * math.tan(math.pi / (4 * n)) if n % 2
+              else math.pi / n * math.tan(math.pi / (2 * n)))
+    assert got == pytest.approx(closed, rel=2e-3)
+    v_g = n * math.pi / 4 * d**2 * 2 * r_s * math.sin(delta)  # N A_p 2 R_S sin(delta)
+    assert mean == pytest.approx(v_g * 200e5 / (2 * math.pi), rel=2e-3)  # V_g dp / 2 pi
+    assert res.theoretical_nm[0] == pytest.approx(v_g * 200e5 / (2 * math.pi), rel=2e-3)
+    assert all(np.isfinite(res.magnitudes_nm[c][0]) and res.magnitudes_nm[c][0] > 0
+               for c in COMPONENTS)
+
+
+def test_nine_pistons_of_the_same_displacement_give_less_ripple_same_torque(paper_raw):
+    """
+    5, 7, 9 pistons of one displacement (bores 9.5 mm sqrt(5/N) on an 11.5 mm pitch circle).
+
+    With the real 25.5 deg bridges the ripple falls with N, roughly as the closed form's
+    1/N^2 (by (5/9)^2 = 0.31 from 5 to 9), while the mean theoretical torque stays
+    V_g dp / 2 pi.
+    """
+    results = {n: ripple(PumpModel(pump_with(paper_raw, n, bore_pitch_radius_m=11.5e-3,
+                                             bore_diameter_m=9.5e-3 * math.sqrt(5 / n))))
+               for n in (5, 7, 9)}
+    assert results[9][1] < results[7][1] < results[5][1]
+    assert results[9][1] / results[5][1] < 0.31
+    v_g = 5 * math.pi / 4 * 9.5e-3**2 * 2 * 10.75e-3 * math.sin(math.radians(40.0))
+    for n, (res, _, mean) in results.items():
+        assert res.theoretical_nm[0] == pytest.approx(v_g * 200e5 / (2 * math.pi), rel=1e-9)
+        assert mean == pytest.approx(res.theoretical_nm[0], rel=1e-2), n  # bridges: < 1 %
+        assert all(res.magnitudes_nm[c][0] > 0 for c in COMPONENTS), n
+
+
+def test_angle_grid_is_a_multiple_of_the_piston_count():
+    from pump_friction_ros.model import angle_count
+    assert [angle_count(n) for n in (3, 5, 7, 9, 11, 100)] == [360, 360, 364, 360, 363, 400]
+    assert angle_count(7, 180) == 182  # the table's coarser grid

@@ -1,30 +1,42 @@
-"""The rclpy node: a publisher -> node -> subscriber round trip, parameters, diagnostics.
+"""
+The rclpy node: a publisher -> node -> subscriber round trip, parameters, diagnostics.
 
 Real rclpy tests; they need a sourced ROS 2 Jazzy and skip with the reason otherwise.
 """
 
-import time
+import os
 from pathlib import Path
+import subprocess
+import sys
+import time
 
 import pytest
 
 rclpy = pytest.importorskip(
     'rclpy', reason='rclpy is not importable: source a ROS 2 Jazzy install to run node tests')
 
-from builtin_interfaces.msg import Time  # noqa: E402
+# Imports that need a sourced ROS 2, after the skip above; flake8-import-order compares
+# them with 'import pytest' across the code in between, hence I100.
+from builtin_interfaces.msg import Time  # noqa: E402, I100
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from rclpy.executors import SingleThreadedExecutor  # noqa: E402
-from rclpy.node import Node  # noqa: E402
-from sensor_msgs.msg import FluidPressure, JointState  # noqa: E402
-from std_msgs.msg import Float64, Header  # noqa: E402
-
+from pump_friction_ros.bags.cdr import MessageDecoder  # noqa: E402
+from pump_friction_ros.bags.sinks import output_qos, output_topics  # noqa: E402
 from pump_friction_ros.config import load_estimator_config  # noqa: E402
 from pump_friction_ros.errors import PumpFrictionError  # noqa: E402
+from pump_friction_ros.inputs import Defect, InputKind, INPUTS  # noqa: E402
 from pump_friction_ros.node import TorqueEstimatorNode  # noqa: E402
-from pump_friction_ros.ros_messages import level_from_msg  # noqa: E402
+from pump_friction_ros.ros_messages import input_sample, level_from_msg, stamp_to_ns  # noqa: E402
 from pump_friction_ros.table import build_table  # noqa: E402
+from rclpy.event_handler import QoSSubscriptionEventType  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rclpy.qos import qos_profile_sensor_data  # noqa: E402
+from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
+from sensor_msgs.msg import FluidPressure, JointState, Temperature  # noqa: E402
+from std_msgs.msg import Float64, Header  # noqa: E402
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml'
+SAMPLE_PARAMS = Path(__file__).resolve().parents[1] / 'bags' / 'eha_params.yaml'
 NS = 1_000_000_000
 
 
@@ -39,7 +51,8 @@ def ros(table_file):
     started = []
 
     def start(*overrides):
-        args = ['--ros-args', '--params-file', str(PARAMS), '-p', f'table_file:={table_file}']
+        args = ['--ros-args', '--params-file', str(PARAMS), '--params-file', str(SAMPLE_PARAMS),
+                '-p', f'table_file:={table_file}']
         for item in overrides:
             args += ['-p', item]
         rclpy.init(args=args)
@@ -100,6 +113,9 @@ def test_published_inputs_come_back_as_the_cores_numbers(ros, paper_params):
         reference = node.core.table.lookup(500.0, 120e5, 46e-6).input_nm + 0.05
         assert expected == pytest.approx(reference, abs=0.05)  # + J * filtered accel (~0)
         assert probe.got['residual'] == pytest.approx(12.0 - expected, abs=1e-9)
+        assert node.received[InputKind.JOINT_STATE] > 0
+        assert node.received[InputKind.LOAD_PRESSURE] > 0
+        assert node.core.counts['rejected_undecodable'] == 0
     finally:
         ex.shutdown()
         probe.destroy_node()
@@ -109,7 +125,7 @@ def test_published_inputs_come_back_as_the_cores_numbers(ros, paper_params):
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:
-        expected = load_estimator_config(PARAMS)
+        expected = load_estimator_config([PARAMS, SAMPLE_PARAMS])  # later files override
         for name, value in expected.__dict__.items():
             if name != 'table_file':
                 assert getattr(node.config, name) == value, name
@@ -158,3 +174,119 @@ def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
 def test_invalid_parameter_stops_start_up_with_one_clear_message(ros, override):
     with pytest.raises(PumpFrictionError, match=override.split(':=')[0]):
         ros(override)
+
+
+def _stamped(sec=5, nanosec=250, frame_id=''):
+    return Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id=frame_id)
+
+
+@pytest.mark.parametrize('kind, msg', [
+    (InputKind.JOINT_STATE, JointState(header=_stamped(), name=['pump_shaft'], position=[0.0],
+                                       velocity=[300.0], effort=[9.5])),
+    (InputKind.JOINT_STATE, JointState(header=_stamped(frame_id='eha'),
+                                       name=['wheel', 'pump_shaft'], position=[],
+                                       velocity=[1.0, -523.5], effort=[])),
+    (InputKind.JOINT_STATE, JointState(header=_stamped(), name=['wheel'], velocity=[1.0])),
+    (InputKind.LOAD_PRESSURE, FluidPressure(header=_stamped(frame_id='p'),
+                                            fluid_pressure=1.36e7, variance=0.0)),
+    (InputKind.OIL_TEMPERATURE, Temperature(header=_stamped(sec=0, nanosec=0),
+                                            temperature=48.5, variance=0.0)),
+    (InputKind.SHAFT_SPEED, Float64(data=523.5)),
+])
+def test_raw_decoding_reads_this_middlewares_serialisation(kind, msg):
+    """The node's raw subscriptions: its parser must take what the rmw really sends."""
+    spec = next(s for s in INPUTS if s.kind == kind)
+    raw = serialize_message(msg)  # the rmw's own serialisation
+    decode = MessageDecoder(spec, 'pump_shaft', lambda b: deserialize_message(b, type(msg)))
+    value, torque, defect = input_sample(spec, msg, 'pump_shaft')
+    stamp = stamp_to_ns(msg.header.stamp) if spec.has_header else None
+    assert decode(raw) == ((None, None, None, defect) if defect else
+                           (stamp, value, torque, Defect.NONE))
+    assert decode.fallbacks == 0  # read by the parser, not by the deserialiser
+
+
+def test_qos_event_handlers_only_where_they_can_fire(ros):
+    node = ros()
+    try:
+        publishers = [*node._pub.values(), node._diag_pub]
+        assert len(publishers) == 6
+        assert all(pub.event_handlers == [] for pub in publishers)
+        assert [len(sub.event_handlers) for sub in node.subscriptions] == [0, 0]  # best effort
+    finally:
+        node.destroy_node()
+    rclpy.try_shutdown()
+    node = ros('reliable_inputs:=true')
+    try:
+        handlers = [h for sub in node.subscriptions for h in sub.event_handlers]
+        assert len(handlers) == 2
+        assert all(h.event_type ==
+                   QoSSubscriptionEventType.RCL_SUBSCRIPTION_REQUESTED_INCOMPATIBLE_QOS
+                   for h in handlers)
+    finally:
+        node.destroy_node()
+
+
+def test_a_best_effort_publisher_is_warned_about_once_with_reliable_inputs(ros):
+    node = ros('reliable_inputs:=true')
+    warnings = []
+
+    class Logger:
+
+        def warning(self, message):
+            warnings.append(message)
+
+    node.get_logger = Logger  # the handler looks the logger up when it fires
+    probe = Node('best_effort_probe')
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    ex.add_node(probe)
+    try:
+        probe.create_publisher(JointState, 'joint_states', qos_profile_sensor_data)
+        assert spin_until(ex, lambda: warnings, 15.0), 'no incompatible-QoS warning'
+        probe.create_publisher(JointState, 'joint_states', qos_profile_sensor_data)
+        spin_until(ex, lambda: len(warnings) > 1, 2.0)
+        assert len(warnings) == 1  # once per topic and policy
+        assert 'joint_states' in warnings[0] and 'RELIABILITY' in warnings[0]
+    finally:
+        ex.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
+def test_outputs_offer_the_qos_the_output_bag_records(ros):
+    pytest.importorskip('rosbags', reason='rosbags is not installed (pip install rosbags)')
+    node = ros()
+    probe = Node('qos_probe')
+    try:
+        publishers = {pub.topic_name: pub for pub in [*node._pub.values(), node._diag_pub]}
+        for topic, _, depth in output_topics():
+            mine, bag = publishers[topic].qos_profile, output_qos(depth)
+            assert (mine.history.name, mine.depth, mine.reliability.name, mine.durability.name,
+                    mine.liveliness.name) == (bag.history.name, bag.depth, bag.reliability.name,
+                                              bag.durability.name, bag.liveliness.name)
+            assert mine.deadline.nanoseconds == mine.lifespan.nanoseconds == 0
+            assert bag.deadline.sec == bag.lifespan.sec == 0
+            end, offered = time.monotonic() + 10.0, []
+            while not offered and time.monotonic() < end:  # the graph, as ros2 bag records it
+                offered = [i.qos_profile for i in probe.get_publishers_info_by_topic(topic)
+                           if i.node_name == 'torque_estimator']
+                time.sleep(0.05)
+            assert [(q.reliability.name, q.durability.name) for q in offered] == [
+                ('RELIABLE', 'VOLATILE')]
+    finally:
+        probe.destroy_node()
+        node.destroy_node()
+
+
+def test_cpu_benchmark_runs_end_to_end(table_file):
+    """A short run of the benchmark (figures are for the README's longer runs, not tested)."""
+    env = dict(os.environ)
+    env['PYTHONPATH'] = os.pathsep.join([str(PARAMS.parents[1]), env.get('PYTHONPATH', '')])
+    done = subprocess.run(
+        [sys.executable, '-m', 'pump_friction_ros.measure_cpu', '--qos', 'reliable', '--runs',
+         '1', '--window-s', '2', '--settle-s', '0.5', '--start-timeout-s', '60',
+         '--estimator-param', f'table_file:={table_file}'],
+        env=env, capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert 'estimator / bare, CPU per input message:' in done.stdout
+    assert 'reliable: estimator / bare = ' in done.stdout

@@ -1,8 +1,9 @@
 """The paper's numbers (Hong & Doh 2004) against the model with the paper's parameter set."""
 
-import pytest
+import math
 
 from pump_friction_ros.paper import paper_checks
+import pytest
 
 
 @pytest.fixture(scope='module')
@@ -54,3 +55,28 @@ def test_measured_efficiency_at_8000_rpm_stays_out_of_reach_as_documented(checks
 def test_model_torque_is_below_measured_like_the_papers(checks):
     for rpm in ('4,000', '8,000'):
         assert checks[f'input torque vs measured, 136 bar, {rpm} rpm'].relative_difference < 0
+
+
+@pytest.fixture(scope='module')
+def consistent_checks(consistent_model):
+    return {row.quantity: row for row in paper_checks(consistent_model)}
+
+
+def test_consistent_set_marks_fit_only_what_it_shares_with_the_fitted_set(consistent_checks):
+    """Same geometry (rod length fitted to 50 rad/s); its own mass, film and bearing."""
+    fitted = [q for q, row in consistent_checks.items() if row.calibrated]
+    assert fitted == ['max piston angular velocity, 10,000 rpm']
+
+
+def test_consistent_set_notes_describe_its_own_choices(consistent_checks, consistent_model):
+    slide = consistent_checks['max joint sliding speed, 10,000 rpm']
+    assert 'flange' in slide.note and not slide.note.startswith('with the joint sliding')
+    # relative to the flange the joint turns at about omega sin(delta) (README), plus the
+    # piston's own swing: well above the paper's barrel-relative 0.275 m/s
+    g = consistent_model.params.geometry
+    floor = 10000 * math.pi / 30 * math.sin(g.inclination_rad) * g.joint_ball_radius_m
+    assert floor < slide.model < 1.3 * floor and not slide.holds
+    assert '35 mm' in consistent_checks['shaft bearing, 300 bar, 10,000 rpm'].note
+    assert '10 um film' in consistent_checks['valve plate, 300 bar, 10,000 rpm'].note
+    assert 'fixes' not in consistent_checks[
+        'max joint reaction F_B, 300 bar, 10,000 rpm'].note

@@ -2,11 +2,10 @@
 
 import copy
 
-import pytest
-import yaml
-
 from pump_friction_ros.errors import ConfigError
 from pump_friction_ros.params import load_pump, pump_from_mapping
+import pytest
+import yaml
 
 from .conftest import CONSISTENT_PUMP, PAPER_PUMP
 
@@ -49,12 +48,19 @@ def test_yaml_1_1_exponent_without_sign_is_read_as_a_number(raw):
     ('geometry', 'rod_length_m', None, 'geometry.rod_length_m: missing'),
     ('geometry', 'n_pistons', 4.5, 'geometry.n_pistons: expected an integer'),
     ('geometry', 'bore_diameter_m', 'wide', 'geometry.bore_diameter_m: expected a number'),
-    ('geometry', 'bore_diameter_m', -9.5e-3, 'geometry.bore_diameter_m: must be > 0'),
+    ('geometry', 'bore_diameter_m', -9.5e-3, 'geometry.bore_diameter_m: must be >= 0.0001'),
     ('geometry', 'rod_length_m', 0.015, 'rod_length_m: must exceed'),
     ('piston', 'mass_kg', float('nan'), 'piston.mass_kg: must be finite'),
     ('piston', 'mass_kg', True, 'piston.mass_kg: expected a number'),
     ('valve_plate', 'port_inner_radius_m', 5e-3, 'R_i < r_i < r_o < R_o'),
-    ('oil', 'viscosity_m2_s', 0.0, 'oil.viscosity_m2_s: must be > 0'),
+    ('oil', 'viscosity_m2_s', 0.0, 'oil.viscosity_m2_s: must be >= 1e-07'),
+    ('valve_plate', 'film_clearance_m', 1e-320, 'film_clearance_m: must be >= 1e-07'),
+    ('valve_plate', 'film_clearance_m', 0.01, 'film_clearance_m: must be <= 0.001'),
+    ('geometry', 'n_pistons', 10**9, 'n_pistons: 1000000000 bores of 0.0095 m do not fit'),
+    ('geometry', 'n_pistons', 7, 'n_pistons: 7 bores of 0.0095 m do not fit'),
+    ('geometry', 'inclination_rad', 1e-300, 'inclination_rad: must be >= 0.0174533'),
+    ('piston', 'mass_kg', 1e-300, 'mass_kg: must be >= 1e-05'),
+    ('bearing', 'mean_diameter_m', 1e-320, 'mean_diameter_m: must be >= 0.0001'),
     ('piston_friction', 'joint_sliding_frame', 'shaft', 'must be one of barrel, flange'),
     ('bearing', 'f0', -1, 'bearing.f0: must be > 0'),
 ])
@@ -107,3 +113,20 @@ def test_consistent_set_only_changes_documented_values(raw):
                       ('valve_plate', 'film_clearance_m'), ('bearing', 'mean_diameter_m'),
                       ('piston_friction', 'joint_sliding_frame')}
     assert copy.deepcopy(raw) == raw
+
+
+def test_absurd_yaml_is_refused_in_one_line(tmp_path):
+    huge = tmp_path / 'huge.yaml'
+    huge.write_text(PAPER_PUMP.read_text().replace('n_pistons: 5 ', 'n_pistons: ' + '9' * 5000))
+    with pytest.raises(ConfigError, match='a number too long'):
+        load_pump(huge)
+    deep = tmp_path / 'deep.yaml'
+    deep.write_text('name: ' + '[' * 100000 + ']' * 100000 + '\n')
+    with pytest.raises(ConfigError, match='invalid YAML'):
+        load_pump(deep)
+
+
+def test_a_huge_integer_is_quoted_without_printing_it():
+    from pump_friction_ros.errors import quote
+    assert quote(10**5000) == 'an integer too long to print'
+    assert quote('x' * 10**6) == repr('x' * 60) + '...'

@@ -1,38 +1,50 @@
 """Offline replay: identical to the node's core, outputs written atomically, bad bags refused."""
 
 import csv
+import dataclasses
+from functools import partial
+import itertools
 import math
-import shutil
 from pathlib import Path
+import shutil
 
+import numpy as np
+from pump_friction_ros import samples
+from pump_friction_ros.bags import reader as bag_reader
+from pump_friction_ros.bags.fleet import discover_bags, ReplayJob, run_jobs
+from pump_friction_ros.bags.outputs import CSV_COLUMNS
+from pump_friction_ros.bags.replay import replay_bag
+from pump_friction_ros.bags.sinks import float64_cdr
+from pump_friction_ros.cli import main
+from pump_friction_ros.config import (
+    EstimatorConfig,
+    load_estimator_config,
+    PressureSource,
+    SpeedSource,
+    TorqueSource,
+    ViscositySource,
+)
+from pump_friction_ros.errors import BagError, OutputError
+from pump_friction_ros.estimator import Estimate, TorqueEstimator
+from pump_friction_ros.inputs import Defect, InputKind, inputs_for
+from pump_friction_ros.ros_messages import input_sample, stamp_to_ns
+from pump_friction_ros.samples import make_sample_bags, write_run
+from pump_friction_ros.simulate import DutyCycle, simulate_duty_cycle
+from pump_friction_ros.table import build_table
 import pytest
 
 try:
     from rosbags.highlevel import AnyReader
     from rosbags.rosbag2 import Reader, StoragePlugin, Writer
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.serde import SerdeError
+    from rosbags.typesys import get_typestore, Stores
 except ImportError:  # a ROS shell without pip's rosbags
     pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
-from pump_friction_ros.bags import BagError
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import EstimatorConfig, load_estimator_config
-from pump_friction_ros.estimator import Estimate, TorqueEstimator
-from pump_friction_ros.replay import (
-    CSV_COLUMNS,
-    ReplayJob,
-    discover_bags,
-    float64_cdr,
-    replay_bag,
-    run_jobs,
-)
-from pump_friction_ros.ros_messages import joint_sample, stamp_to_ns
-from pump_friction_ros.samples import make_sample_bags, write_run
-from pump_friction_ros.simulate import DutyCycle, simulate_duty_cycle
-from pump_friction_ros.table import build_table
-
 REPO = Path(__file__).resolve().parents[1]
-CONFIG = load_estimator_config(REPO / 'config' / 'torque_estimator.yaml')
+# the shipped defaults, then what the sample bags' simulated pump brings with them
+SAMPLE_PARAMS = REPO / 'bags' / 'eha_params.yaml'
+CONFIG = load_estimator_config([REPO / 'config' / 'torque_estimator.yaml', SAMPLE_PARAMS])
 
 
 @pytest.fixture(scope='module')
@@ -55,41 +67,217 @@ def monkeypatch_module(tmp_path_factory):
     mp.undo()
 
 
-def core_for(table):
-    return TorqueEstimator(CONFIG, table, 70e-6, 'hong_doh_2004')
+def core_for(table, config=CONFIG):
+    return TorqueEstimator(config, table, 70e-6, 'hong_doh_2004')
 
 
-def node_path_estimates(bag, table):
-    """Compute what the live node's callbacks would: rosbags messages, node conversions."""
-    core = core_for(table)
+def node_callbacks(bag, config, core):
+    """
+    Run a bag through the node's callback logic, without rclpy.
+
+    What `node.TorqueEstimatorNode` does with each message of a subscribed topic: rosbags
+    deserialises it (where rclpy would), `input_sample` converts it, a defect is counted,
+    else the stamp rule picks the header stamp (its receive time, here the log time, when
+    zero or headerless) and the core takes the sample. Nothing of the replay's reader or
+    batch decoder is used. A message that does not deserialise is one rclpy would never
+    deliver; a bag can hold it, and it is counted as undecodable.
+    """
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    specs = {'/' + spec.topic: spec for spec in inputs_for(config)}
     out = []
-    with AnyReader([Path(bag)]) as reader:
-        for conn, log_ns, raw in reader.messages():
-            msg = reader.deserialize(raw, conn.msgtype)
-            stamp = stamp_to_ns(msg.header.stamp) or log_ns
-            if conn.topic == '/joint_states':
-                sample = joint_sample(msg, CONFIG.joint_name)
-                if sample is not None:
-                    est = core.on_joint_state(stamp, *sample)
-                    if est is not None:
-                        out.append(est)
-            elif conn.topic == '/load_pressure':
-                core.on_pressure(stamp, msg.fluid_pressure)
+    with AnyReader([Path(bag)], default_typestore=ts) as reader:
+        conns = [c for c in reader.connections if c.topic in specs]
+        for conn, now, raw in reader.messages(connections=conns):
+            spec = specs[conn.topic]
+            try:
+                msg = ts.deserialize_cdr(raw, conn.msgtype)
+            except SerdeError:
+                core.on_defect(Defect.UNDECODABLE)
+                continue
+            value, torque, defect = input_sample(spec, msg, config.joint_name)
+            if defect:
+                core.on_defect(defect)
+                continue
+            stamp = (stamp_to_ns(msg.header.stamp) or now) if spec.has_header else now
+            est = core.on_input(spec.kind, stamp, value, torque, now)
+            if est is not None:
+                out.append(est)
     return out
 
 
+def _flat(estimate):
+    for x in estimate:
+        yield from (x if isinstance(x, tuple) else (x,))
+
+
 def same(a: Estimate, b: Estimate) -> bool:
-    return all((x == y) or (isinstance(x, float) and math.isnan(x) and math.isnan(y))
-               for x, y in zip(a, b, strict=True))
+    return all(x == y or (isinstance(x, float) and math.isnan(x) and math.isnan(y))
+               for x, y in zip(_flat(a), _flat(b), strict=True))
 
 
 @pytest.mark.parametrize('which', ['nominal', 'wear'])
-def test_replay_equals_the_live_nodes_core_message_for_message(bags, table, which):
-    summary = replay_bag(bags[which], CONFIG, keep_estimates=True, core=core_for(table))
-    reference = node_path_estimates(bags[which], table)
+def test_sample_bags_replay_like_the_node_callbacks_without_fallback_decoding(bags, table,
+                                                                              which):
+    core = core_for(table)
+    summary = replay_bag(bags[which], CONFIG, keep_estimates=True, core=core)
+    reference_core = core_for(table)
+    reference = node_callbacks(bags[which], CONFIG, reference_core)
     assert len(summary.estimates_list) == len(reference) == 12000
     assert all(same(a, b) for a, b in zip(summary.estimates_list, reference, strict=True))
-    assert summary.decoded_one_by_one == 0  # the batch decoder handled every message
+    assert summary.counts == core.counts == reference_core.counts
+    # A performance guard, not a correctness one: the fallback gives the same samples
+    # (test_cdr.py) about 15x slower, so a layout-parser change that sent every regular
+    # message to it would pass every other test and make replays crawl.
+    assert summary.decoded_one_by_one == 0
+
+
+SOURCE_COMBOS = list(itertools.product(SpeedSource, TorqueSource, PressureSource,
+                                       ViscositySource))
+_LATENCY_NS = {  # receive latency per topic: log times never tie, so bag order is defined
+    InputKind.JOINT_STATE: 150_001, InputKind.SHAFT_SPEED: 150_003,
+    InputKind.MOTOR_TORQUE: 150_007, InputKind.LOAD_PRESSURE: 90_011,
+    InputKind.PRESSURE_A: 90_013, InputKind.PRESSURE_B: 90_017,
+    InputKind.OIL_TEMPERATURE: 50_019}
+_START_NS = 1_700_000_000 * 1_000_000_000
+
+
+def _header(t, ns, frame):
+    return t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
+        sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id=frame)
+
+
+def _irregular_joint_state(k, t, joint, ns, speed, torque):
+    """Make JointState number ``k``: mostly regular, with the defects the node must count."""
+    one = partial(np.array, dtype=np.float64)
+    names, pos, vel, eff, frame = [joint], one([]), one([speed]), one([torque]), ''
+    if 100 <= k < 105:
+        eff = one([math.nan])  # NaN effort: rejected_non_finite (torque from JointState)
+    elif k == 200:
+        names = ['wheel']  # rejected_missing_joint
+    elif k == 300:
+        vel = eff = one([])  # empty arrays: rejected_malformed
+    elif k == 400:
+        names, vel = ['wheel', joint], one([1.0, speed])  # effort of 1 for 2 names: malformed
+    elif k == 500:
+        ns = 0  # zero header stamp: the receive (log) time is used
+    elif k == 600:
+        ns -= 30_000_000  # out-of-order stamp
+    elif k == 650:
+        ns -= 1_000_000  # the previous sample's stamp: duplicate
+    elif 700 <= k < 705:
+        names, pos = [joint, 'wheel'], one([0.0, 0.0])  # reordered joints, position filled
+        vel, eff = one([speed, 3.0]), one([torque, -1.0])
+    elif 800 <= k < 810:
+        frame = 'pump_frame'  # frame_id changes mid-stream
+    elif k == 900:
+        eff = one([])  # speed only
+    elif k == 901:
+        vel = one([])  # torque only
+    elif k == 1000:
+        ns += 5_000_000_000  # far ahead of the receive time: rejected_future_stamp
+    return t['sensor_msgs/msg/JointState'](header=_header(t, ns, frame), name=names,
+                                           position=pos, velocity=vel, effort=eff)
+
+
+def write_source_bag(path, run, config, storage):
+    """
+    Write the topics ``inputs_for(config)`` lists, from a simulated run, with defects.
+
+    JointState, FluidPressure and Temperature carry the sample time in their header; the
+    Float64 topics carry speed and torque with their log (receive) time as the only stamp.
+    Each topic also holds a big-endian message and a truncated (undecodable) one.
+    """
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    t = ts.types
+    joint_ns = (_START_NS + np.round(run.t_s * 1e9).astype(np.int64)).tolist()
+    press_ns = (_START_NS + np.round(run.pressure_t_s * 1e9).astype(np.int64)).tolist()
+    messages = []  # (log time, kind, raw)
+
+    def add(spec, k, sample_ns, msg, big_endian_at, truncate_at=-1):
+        raw = bytes(ts.serialize_cdr(msg, spec.msgtype, little_endian=k != big_endian_at))
+        if k == truncate_at:
+            raw = raw[:len(raw) - 5]
+        messages.append((sample_ns + _LATENCY_NS[spec.kind], spec.kind, raw))
+
+    for spec in inputs_for(config):
+        kind = spec.kind
+        if kind == InputKind.JOINT_STATE:
+            for k, ns in enumerate(joint_ns):
+                add(spec, k, ns, _irregular_joint_state(k, t, config.joint_name, ns,
+                                                        run.speed_rad_s[k], run.torque_nm[k]),
+                    big_endian_at=1050, truncate_at=1100)
+        elif kind in (InputKind.SHAFT_SPEED, InputKind.MOTOR_TORQUE):
+            values = (run.speed_rad_s if kind == InputKind.SHAFT_SPEED
+                      else run.torque_nm).copy()
+            values[150:153] = math.nan
+            values[350] = 2.0e4  # beyond any plausible speed or torque: out of range
+            for k, ns in enumerate(joint_ns):
+                add(spec, k, ns, t[spec.msgtype](data=float(values[k])), big_endian_at=550,
+                    truncate_at=450)
+        elif kind == InputKind.OIL_TEMPERATURE:
+            for k, ns in enumerate(range(joint_ns[0], joint_ns[-1], 50_000_000)):
+                celsius = 300.0 if k == 7 else math.nan if k == 9 else 45.0 + 0.2 * k
+                msg = t[spec.msgtype](header=_header(t, 0 if k == 11 else ns, 'oil'),
+                                      temperature=celsius, variance=0.0)
+                add(spec, k, ns, msg, big_endian_at=13)
+        else:
+            dp = run.pressure_diff_pa
+            if kind == InputKind.LOAD_PRESSURE:
+                values = dp.copy()
+            else:  # port pressures, a - b = dp
+                values = 1.0e5 + np.maximum((1.0 if kind == InputKind.PRESSURE_A else -1.0)
+                                            * dp, 0.0)
+            values[120] = math.nan
+            for k, ns in enumerate(press_ns):
+                if 600 <= k < 650:
+                    continue  # 100 ms without pressure: stale_skips
+                stamp = 0 if k == 250 else ns - 40_000_000 if k == 260 else ns
+                msg = t[spec.msgtype](header=_header(t, stamp, 'pump'),
+                                      fluid_pressure=float(values[k]), variance=0.0)
+                add(spec, k, ns, msg, big_endian_at=300, truncate_at=310)
+    messages.sort(key=lambda m: m[0])
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with Writer(path, version=9, storage_plugin=plugin) as writer:
+        conns = {spec.kind: writer.add_connection('/' + spec.topic, spec.msgtype, typestore=ts)
+                 for spec in inputs_for(config)}
+        for log_ns, kind, raw in messages:
+            writer.write(conns[kind], log_ns, raw)
+    return path
+
+
+@pytest.fixture(scope='module')
+def short_run(table):
+    return simulate_duty_cycle(table, DutyCycle(duration_s=3.0), seed=11)
+
+
+@pytest.mark.parametrize(('speed', 'torque', 'pressure', 'viscosity'), SOURCE_COMBOS,
+                         ids=['-'.join(c.value for c in combo) for combo in SOURCE_COMBOS])
+def test_replay_equals_the_node_callbacks_for_every_source_combination(
+        tmp_path, table, short_run, monkeypatch, speed, torque, pressure, viscosity):
+    config = dataclasses.replace(CONFIG, speed_source=speed, torque_source=torque,
+                                 pressure_source=pressure, viscosity_source=viscosity)
+    storage = ('sqlite3', 'mcap')[SOURCE_COMBOS.index((speed, torque, pressure, viscosity)) % 2]
+    bag = write_source_bag(tmp_path / 'bag', short_run, config, storage)
+    monkeypatch.setattr(bag_reader, '_CHUNK_MESSAGES', 997)  # layouts split across chunks
+    core = core_for(table, config)
+    summary = replay_bag(bag, config, keep_estimates=True, core=core)
+    reference_core = core_for(table, config)
+    reference = node_callbacks(bag, config, reference_core)
+
+    assert summary.storage == storage
+    assert len(summary.estimates_list) == len(reference) > 1000
+    assert all(same(a, b) for a, b in zip(summary.estimates_list, reference, strict=True))
+    assert core.counts == reference_core.counts == summary.counts
+    counts = core.counts  # the bag holds every defect it was written with
+    for name in ('rejected_non_finite', 'rejected_out_of_order', 'rejected_undecodable',
+                 'stale_skips', 'residuals', 'monitor_samples'):
+        assert counts[name], name
+    joint_used = SpeedSource.JOINT_STATE in (speed, torque)
+    for name in ('rejected_missing_joint', 'rejected_malformed', 'rejected_future_stamp',
+                 'rejected_duplicate'):
+        assert bool(counts[name]) == joint_used, name
+    assert bool(counts['rejected_out_of_range']) == (
+        SpeedSource.FLOAT64 in (speed, torque) or viscosity == ViscositySource.TEMPERATURE)
 
 
 def test_output_bag_holds_the_nodes_topics_at_publication_times(tmp_path, bags, table):
@@ -129,7 +317,7 @@ def test_storage_can_be_chosen_and_csv_and_plots_are_written(tmp_path, bags, tab
     assert tuple(rows[0]) == CSV_COLUMNS
     assert len(rows) == summary.estimates + 1
     assert sorted(p.name for p in (tmp_path / 'plots').iterdir()) == [
-        'efficiency.png', 'residual.png', 'torque.png', 'valve_plate_scale.png']
+        'efficiency.png', 'friction_scales.png', 'residual.png', 'torque.png']
     assert not list(tmp_path.glob('.*partial*'))
 
 
@@ -201,7 +389,7 @@ def test_damage_found_at_open_or_while_reading_leaves_nothing(tmp_path, table, c
 def test_existing_output_is_refused_unless_forced(tmp_path, bags, table):
     out = tmp_path / 'out'
     replay_bag(bags['nominal'], CONFIG, out_bag=out, core=core_for(table))
-    with pytest.raises(BagError, match='output exists'):
+    with pytest.raises(OutputError, match='output exists'):
         replay_bag(bags['nominal'], CONFIG, out_bag=out, core=core_for(table))
     summary = replay_bag(bags['nominal'], CONFIG, out_bag=out, force=True, core=core_for(table))
     assert summary.outputs['bag'] == str(out)
@@ -221,7 +409,7 @@ def test_topic_remap_reads_renamed_topics(tmp_path, table):
             writer.write(conns[name], log_ns, raw)
     with pytest.raises(BagError, match='--topic-remap'):
         replay_bag(moved, CONFIG)
-    from pump_friction_ros.bags import parse_remaps
+    from pump_friction_ros.bags.reader import parse_remaps
     summary = replay_bag(moved, CONFIG, core=core_for(table),
                          remaps=parse_remaps(['joint_states:=/eha/js', 'load_pressure:=/eha/dp']))
     assert summary.estimates == 2000
@@ -244,14 +432,27 @@ def test_sample_bags_are_reproducible_from_their_seed(tmp_path, monkeypatch_modu
 
 
 def test_shipped_sample_bags_replay_as_documented():
+    """The README's figures for the sample bags, parsed from the README."""
+    import re
+    readme = (REPO / 'README.md').read_text()
+    figures = re.search(r'the wear bag goes WARN at\s+([\d.]+) s and ERROR at ([\d.]+) s, '
+                        r'and ends\s+with the valve-plate scale at ([\d.]+) \+- ([\d.]+) '
+                        r'\(95 %;\s+the simulated truth is ([\d.]+)\)', readme)
+    warn_s, error_s, final, interval, truth = map(float, figures.groups())
     nominal = replay_bag(REPO / 'bags' / 'eha_nominal', CONFIG)
     wear = replay_bag(REPO / 'bags' / 'eha_valve_plate_wear', CONFIG)
     assert nominal.storage == 'sqlite3' and wear.storage == 'mcap'
     assert nominal.duration_s >= 60 and wear.duration_s >= 60
     assert nominal.messages_read == {'/joint_states': 75000, '/load_pressure': 37500}
-    assert not nominal.warn_intervals and not nominal.error_intervals
-    assert wear.warn_intervals and wear.warn_intervals[0][0] > 25.0  # wear starts at 25 s
-    assert wear.final_valve_plate_scale > 1.15
+    assert not nominal.warn_intervals and not nominal.error_intervals  # "stays OK"
+    assert wear.warn_intervals[0][0] == pytest.approx(warn_s, abs=0.05)  # wear from 25 s
+    assert wear.error_intervals[0][0] == pytest.approx(error_s, abs=0.05)
+    assert wear.final_valve_plate_scale == pytest.approx(final, abs=5e-4)
+    assert 1.96 * wear.final_valve_plate_scale_std == pytest.approx(interval, abs=5e-4)
+    assert truth == 1.6 == samples.WEAR_SCALE  # the wear the sample bag was made with
+    assert abs(wear.final_valve_plate_scale - truth) < interval  # the interval holds the truth
+    defaults = replay_bag(REPO / 'bags' / 'eha_nominal', EstimatorConfig())
+    assert defaults.error_intervals  # README: without eha_params.yaml even nominal alarms
     for bag in ('eha_nominal', 'eha_valve_plate_wear'):
         size = sum(f.stat().st_size for f in (REPO / 'bags' / bag).iterdir())
         assert size < 5e6
@@ -278,7 +479,8 @@ def test_cli_fleet_prints_one_line_per_bag_and_a_table(tmp_path, bags, capsys):
     code = main(['replay', str(bags['nominal'].parent), '--workers', '2', '--quiet'])
     out = capsys.readouterr().out
     assert code == 0
-    assert 'fleet: 2 bags (0 failed)' in out and 'worst valve-plate scale' in out
+    assert 'fleet: 2 bags (0 failed)' in out and 'highest valve-plate scale at the end' in out
+    assert out.count(' estimates, ') == 2  # one line per bag
 
 
 def test_cli_single_bag_errors_exit_2_with_one_line(tmp_path, capsys):

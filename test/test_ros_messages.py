@@ -4,15 +4,9 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
-import pytest
-
-try:
-    from rosbags.typesys import Stores, get_typestore
-except ImportError:  # a ROS shell without pip's rosbags: skip, do not break collection
-    pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
-
 from pump_friction_ros.config import EstimatorConfig
 from pump_friction_ros.estimator import TorqueEstimator
+from pump_friction_ros.inputs import Defect, InputKind
 from pump_friction_ros.ros_messages import (
     diagnostic_array,
     float64_message,
@@ -25,6 +19,12 @@ from pump_friction_ros.ros_messages import (
     stamp_to_ns,
 )
 from pump_friction_ros.table import build_table
+import pytest
+
+try:
+    from rosbags.typesys import get_typestore, Stores
+except ImportError:  # a ROS shell without pip's rosbags: skip, do not break collection
+    pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
 STORE = get_typestore(Stores.ROS2_JAZZY) if 'get_typestore' in globals() else None
 T = STORE.types if STORE is not None else {}
@@ -36,7 +36,7 @@ def roundtrip(msg, msgtype):
 
 def joint_state(names, velocity, effort, sec=5, nanosec=250):
     header = T['std_msgs/msg/Header'](stamp=T['builtin_interfaces/msg/Time'](sec=sec,
-                                                                              nanosec=nanosec),
+                                                                             nanosec=nanosec),
                                       frame_id='')
     return T['sensor_msgs/msg/JointState'](
         header=header, name=names, position=np.zeros(len(names)),
@@ -46,24 +46,24 @@ def joint_state(names, velocity, effort, sec=5, nanosec=250):
 def test_joint_found_by_name_among_several_after_a_cdr_round_trip():
     msg = roundtrip(joint_state(['wheel', 'pump_shaft'], [1.0, 523.5], [0.2, 12.25]),
                     'sensor_msgs/msg/JointState')
-    assert joint_sample(msg, 'pump_shaft') == (523.5, 12.25)
-    assert joint_sample(msg, 'wheel') == (1.0, 0.2)
+    assert joint_sample(msg, 'pump_shaft') == (523.5, 12.25, Defect.NONE)
+    assert joint_sample(msg, 'wheel') == (1.0, 0.2, Defect.NONE)
     assert stamp_to_ns(msg.header.stamp) == 5_000_000_250
 
 
 def test_unfilled_arrays_and_missing_joint():
     msg = joint_state(['pump_shaft'], [300.0], [])
-    assert joint_sample(msg, 'pump_shaft') == (300.0, None)
+    assert joint_sample(msg, 'pump_shaft') == (300.0, None, Defect.NONE)
     msg = joint_state(['pump_shaft'], [], [4.0])
-    assert joint_sample(msg, 'pump_shaft') == (None, 4.0)
-    assert joint_sample(msg, 'other') is None
+    assert joint_sample(msg, 'pump_shaft') == (None, 4.0, Defect.NONE)
+    assert joint_sample(msg, 'other') == (None, None, Defect.MISSING_JOINT)
 
 
 def test_rclpy_style_array_fields_work_too():
     import array
-    msg = SimpleNamespace(name=['pump_shaft'], velocity=array.array('d', [7.5]),
-                          effort=array.array('d'))
-    assert joint_sample(msg, 'pump_shaft') == (7.5, None)
+    msg = SimpleNamespace(name=['pump_shaft'], position=array.array('d'),
+                          velocity=array.array('d', [7.5]), effort=array.array('d'))
+    assert joint_sample(msg, 'pump_shaft') == (7.5, None, Defect.NONE)
 
 
 def test_zero_stamp_means_unset():
@@ -101,8 +101,8 @@ def estimator(paper_params):
     est = TorqueEstimator(EstimatorConfig(oil_viscosity_m2_s=46e-6), build_table(paper_params),
                           46e-6, 'hong_doh_2004')
     est.on_pressure(0, 120e5)
-    est.on_torque(0, 11.0)
-    est.on_speed(1_000, 500.0)
+    est.on_input(InputKind.MOTOR_TORQUE, 0, 11.0)
+    est.on_input(InputKind.SHAFT_SPEED, 1_000, 500.0)
     return est
 
 
@@ -128,7 +128,7 @@ def test_outputs_skip_undefined_values(estimator):
     assert 'efficiency' in topics
     stale_torque = est._replace(residual_nm=math.nan, efficiency=math.nan)
     assert set(dict(outputs_of(stale_torque))) == {'expected_torque', 'friction_torque',
-                                                    'valve_plate_friction_scale'}
+                                                   'valve_plate_friction_scale'}
 
 
 def test_float64_and_stamp_builders_round_trip():

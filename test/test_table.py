@@ -4,22 +4,20 @@ import json
 import math
 
 import numpy as np
-import pytest
-from scipy.interpolate import RegularGridInterpolator
-
 from pump_friction_ros import table as tb
 from pump_friction_ros.errors import TableError
 from pump_friction_ros.model import COMPONENTS, PumpModel
 from pump_friction_ros.table import (
+    build_table,
     NOT_FINITE,
     PRESSURE_CLAMPED,
     SPEED_CLAMPED,
-    VISCOSITY_CLAMPED,
     TableSpec,
-    build_table,
-    cached_table,
-    load_table,
+    VISCOSITY_CLAMPED,
 )
+from pump_friction_ros.table_io import cached_table, load_table
+import pytest
+from scipy.interpolate import RegularGridInterpolator
 
 
 @pytest.fixture(scope='module')

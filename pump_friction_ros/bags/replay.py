@@ -1,0 +1,472 @@
+"""
+Offline replay: the node's outputs from a rosbag2 bag, written back to a bag, CSV, plots.
+
+The replay feeds the same ROS-free core as the live node (`TorqueEstimator.on_input`),
+message by message in bag order, with the same timestamps the node would use (header
+stamps, else the receive time, which in a bag is the log time). `replay_events` is the
+loop: a generator of estimates and of the node's diagnostics timer ticks, emulated on bag
+time (first tick one period after the first message). `replay_bag` writes its outputs; the
+calibration consumes `bag_estimates`. Outputs carry the log time of the message that
+produced them, which is when the node would have published them. For the same message
+sequence the outputs are identical to the node's (``test_replay.py`` checks it against the
+node's own conversion path, for every combination of input sources).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack
+import csv
+from dataclasses import dataclass, field
+import math
+from pathlib import Path
+import time
+from typing import Any, NamedTuple, TextIO
+
+from .outputs import CSV_COLUMNS, csv_row
+from .sinks import (
+    COMPRESSION_CHOICES,
+    DIAGNOSTICS_INDEX,
+    float64_cdr,
+    open_sink,
+    output_compression,
+    OUTPUT_INDEX,
+    Sink,
+)
+from .sources import open_source, ProcessSource, Source
+from ..config import EstimatorConfig, NODE_NAME
+from ..diagnostics import level_message
+from ..errors import BagError
+from ..estimate import COUNTERS, Estimate
+from ..estimator import estimator_from_config, TorqueEstimator
+from ..model import efficiency_of
+from ..monitor import ERROR, WARN
+from ..progress import ProgressBar
+from ..ros_messages import diagnostic_array, outputs_of, rosbags_types
+from ..staging import looks_like_bag, looks_like_plots, sigint_held, Staged, StagedOutputs
+
+__all__ = ['CSV_COLUMNS', 'ReplayEvent', 'ReplaySummary', 'bag_estimates', 'replay_bag',
+           'replay_events']
+
+_NEVER = 1 << 63
+
+
+@dataclass
+class ReplaySummary:
+    """What a replay did, for the printed summary and the fleet table."""
+
+    bag: str
+    label: str = ''  # the bag's name in a fleet (unique; see ``fleet.output_names``)
+    storage: str = ''
+    duration_s: float = 0.0
+    messages_read: dict[str, int] = field(default_factory=dict)
+    estimates: int = 0
+    published: int = 0
+    counts: dict[str, int] = field(default_factory=dict)
+    decoded_one_by_one: int = 0
+    warn_intervals: list[tuple[float, float]] = field(default_factory=list)
+    error_intervals: list[tuple[float, float]] = field(default_factory=list)
+    final_level: int = 0
+    final_valve_plate_scale: float = math.nan
+    final_valve_plate_scale_std: float = math.nan
+    final_other_scale: float = math.nan
+    final_other_scale_std: float = math.nan
+    attribution: str = ''  # what explains the torque at the end (the status message's words)
+    elapsed_s: float = 0.0
+    outputs: dict[str, str] = field(default_factory=dict)
+    error: str = ''
+    estimates_list: list[Estimate] | None = None
+
+    @property
+    def alarm_onset_s(self) -> float:
+        """Time of the first entry into WARN or ERROR, from the start of the bag [s]."""
+        starts = [a for a, _ in self.warn_intervals + self.error_intervals]
+        return min(starts) if starts else math.nan
+
+    @property
+    def alarm_s(self) -> float:
+        """Time spent at WARN or ERROR [s]."""
+        return sum(b - a for a, b in self.warn_intervals + self.error_intervals)
+
+    def formatted(self) -> str:
+        """
+        Multi-line summary for a person.
+
+        Returns
+        -------
+        str
+            The summary.
+
+        """
+        if self.error:
+            return f'{self.bag}: FAILED: {self.error}'
+
+        def intervals(items: list[tuple[float, float]]) -> str:
+            return ', '.join(f'{a:.1f}-{b:.1f} s' for a, b in items) or 'none'
+
+        lines = [f'bag {self.bag} ({self.storage}): {self.duration_s:.1f} s',
+                 '  messages read: ' + ', '.join(f'{t} {n}'
+                                                 for t, n in self.messages_read.items()),
+                 f'  estimates: {self.estimates} ({self.published} published)',
+                 '  skipped: ' + ', '.join(
+                     f'{k} {self.counts.get(k, 0)}' for k in COUNTERS
+                     if k.startswith(('stale', 'rejected', 'clamped', 'stamp'))),
+                 f'  WARN: {intervals(self.warn_intervals)}',
+                 f'  ERROR: {intervals(self.error_intervals)}',
+                 f'  first alarm at {self.alarm_onset_s:.1f} s' if self.warn_intervals
+                 or self.error_intervals else '  no alarm',
+                 f'  final status: {self.attribution}',
+                 f'  friction scales at the end: valve plate {self.final_valve_plate_scale:.3f}'
+                 f' +- {1.96 * self.final_valve_plate_scale_std:.3f}, other components '
+                 f'{self.final_other_scale:.3f} +- {1.96 * self.final_other_scale_std:.3f} '
+                 '(95 %)',
+                 f'  replayed in {self.elapsed_s:.2f} s']
+        lines += [f'  {kind}: {path}' for kind, path in self.outputs.items()]
+        return '\n'.join(lines)
+
+
+class LevelTracker:
+    """Intervals spent at WARN and at ERROR, from the level of each estimate."""
+
+    def __init__(self) -> None:
+        self.level = 0
+        self.since_ns = 0
+        self.warn: list[tuple[int, int]] = []
+        self.error: list[tuple[int, int]] = []
+
+    def update(self, level: int, stamp_ns: int) -> None:
+        if level == self.level:
+            return
+        self._close(stamp_ns)
+        self.level, self.since_ns = level, stamp_ns
+
+    def _close(self, stamp_ns: int) -> None:
+        if self.level == WARN:
+            self.warn.append((self.since_ns, stamp_ns))
+        elif self.level == ERROR:
+            self.error.append((self.since_ns, stamp_ns))
+
+    def finish(self, stamp_ns: int) -> None:
+        self._close(stamp_ns)
+        self.level = 0
+
+
+class ReplayEvent(NamedTuple):
+    """One thing the node would do: publish an estimate, or tick its diagnostics timer."""
+
+    log_ns: int  # when [ns]
+    estimate: Estimate | None  # None: the diagnostics timer fires
+
+
+def replay_events(source: Source, core: TorqueEstimator, tick_period_ns: int | None = None,
+                  progress: Callable[[float], None] | None = None) -> Iterator[ReplayEvent]:
+    """
+    Run a bag's input events through the core, in bag order.
+
+    Parameters
+    ----------
+    source : Source
+        Decoded input events (``sources.open_source``).
+    core : TorqueEstimator
+        The core, fed exactly as the node feeds it.
+    tick_period_ns : int, optional
+        Period of the node's diagnostics timer [ns]; None: no ticks.
+    progress : callable, optional
+        Called with the fraction of messages done after each chunk.
+
+    Yields
+    ------
+    ReplayEvent
+        Each estimate made, and each timer tick, in time order.
+
+    """
+    meta = source.meta
+    next_tick = meta.start_ns + tick_period_ns if tick_period_ns else _NEVER
+    on_input, on_defect = core.on_input, core.on_defect
+    total = max(meta.input_message_count, 1)
+    done = 0
+    for chunk in source.chunks():
+        for kind, stamp, log_ns, value, torque, has_value, has_torque, defect in zip(
+                chunk.kinds, chunk.stamps, chunk.log_times, chunk.values, chunk.torques,
+                chunk.has_value, chunk.has_torque, chunk.defects, strict=True):
+            while next_tick <= log_ns:
+                yield ReplayEvent(next_tick, None)
+                next_tick += tick_period_ns  # type: ignore[operator]
+            if defect:
+                on_defect(defect)
+                continue
+            est = on_input(kind, stamp, value if has_value else None,
+                           torque if has_torque else None, log_ns)
+            if est is not None:
+                yield ReplayEvent(log_ns, est)
+        done += len(chunk.kinds)
+        if progress is not None:
+            progress(min(done / total, 1.0))
+    while next_tick <= meta.end_ns:
+        yield ReplayEvent(next_tick, None)
+        next_tick += tick_period_ns  # type: ignore[operator]
+
+
+def bag_estimates(bag: str | Path, config: EstimatorConfig, core: TorqueEstimator,
+                  remaps: dict[str, str] | None = None) -> Iterator[Estimate]:
+    """
+    Yield every estimate the node would make from a bag (the calibration's input).
+
+    Parameters
+    ----------
+    bag : str or Path
+        The bag.
+    config : EstimatorConfig
+        Node parameters (topics, joint).
+    core : TorqueEstimator
+        The core to feed.
+    remaps : dict, optional
+        Topic remappings.
+
+    Yields
+    ------
+    Estimate
+        In bag order.
+
+    """
+    source = open_source(bag, config, remaps)
+    try:
+        for event in replay_events(source, core):
+            if event.estimate is not None:
+                yield event.estimate
+    finally:
+        source.close()
+
+
+class _Series:
+    """What the plots need, one row per published estimate (SI)."""
+
+    KEYS = ('time_s', 'expected_nm', 'measured_nm', 'friction_residual_nm', 'monitored',
+            'cusum_pos_nm_s', 'cusum_neg_nm_s', 'vp_scale', 'vp_scale_std', 'other_scale',
+            'other_scale_std', 'efficiency', 'measured_efficiency', 'pump_mode', 'level')
+
+    def __init__(self, core: TorqueEstimator) -> None:
+        self.data: dict[str, list[float]] = {k: [] for k in self.KEYS}
+        self._core = core
+        cfg = core.config
+        self._min_speed = cfg.monitor_min_speed_rad_s
+        self._max_accel = cfg.monitor_max_accel_rad_s2
+
+    def add(self, est: Estimate, start_ns: int) -> None:
+        mon = self._core.monitor
+        table = self._core.table
+        sign = 1.0 if est.speed_rad_s >= 0.0 else -1.0
+        monitored = (abs(est.speed_rad_s) >= self._min_speed
+                     and abs(est.accel_rad_s2) <= self._max_accel
+                     and math.isfinite(est.residual_nm))
+        measured_eff = efficiency_of(est.theoretical_nm, est.measured_nm - est.inertia_nm,
+                                     est.speed_rad_s, est.pressure_diff_pa,
+                                     table.efficiency_min_speed_rad_s,
+                                     table.efficiency_min_pressure_pa) \
+            if math.isfinite(est.measured_nm) else math.nan
+        row = ((est.stamp_ns - start_ns) * 1e-9, est.expected_nm, est.measured_nm,
+               est.residual_nm * sign, float(monitored), mon.cusum_pos_nm_s,
+               mon.cusum_neg_nm_s, est.valve_plate_scale, est.valve_plate_scale_std,
+               mon.theta_rest, mon.rest_scale_std, est.efficiency, measured_eff,
+               float(est.theoretical_nm * est.speed_rad_s > 0.0), est.level)
+        for key, value in zip(self.KEYS, row, strict=True):
+            self.data[key].append(value)
+
+
+def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
+               out_bag: str | Path | None = None, csv_path: str | Path | None = None,
+               plots_dir: str | Path | None = None, remaps: dict[str, str] | None = None,
+               storage: str | None = None, compression: str = 'auto', force: bool = False,
+               progress: bool = False, keep_estimates: bool = False,
+               core: TorqueEstimator | None = None, pipeline: bool | None = None
+               ) -> ReplaySummary:
+    """
+    Replay one bag through the estimator core and write the outputs asked for.
+
+    Parameters
+    ----------
+    bag : str or Path
+        Input rosbag2 directory (sqlite3 or mcap).
+    config : EstimatorConfig, optional
+        Node parameters (default: the node's defaults).
+    out_bag : str or Path, optional
+        Output bag with the node's published topics.
+    csv_path : str or Path, optional
+        CSV file, one row per estimate.
+    plots_dir : str or Path, optional
+        Folder for the PNG plots.
+    remaps : dict, optional
+        Topic remappings (node name -> bag name).
+    storage : {'sqlite3', 'mcap'}, optional
+        Storage of the output bag (default: the input's).
+    compression : {'auto', 'none', 'zstd'}
+        zstd compression of the output bag: ``auto`` follows the input (MCAP chunk, sqlite3
+        file or message compression), ``zstd`` uses chunks for MCAP and file compression
+        for sqlite3 (`sinks.output_compression`).
+    force : bool
+        Replace existing outputs.
+    progress : bool
+        Progress bar on stderr (on a terminal).
+    keep_estimates : bool
+        Keep every estimate in the summary (tests).
+    core : TorqueEstimator, optional
+        Core to use (default: built from ``config``).
+    pipeline : bool, optional
+        Read and write the bags in two helper processes while this one runs the core
+        (default: yes, unless this process is daemonic, e.g. a Dask worker). The results
+        are the same either way: the core runs here, in bag order.
+
+    Returns
+    -------
+    ReplaySummary
+        What happened.
+
+    Raises
+    ------
+    BagError
+        Unusable bag or output path, or a bag from which no estimate could be made (the
+        message says which skips); nothing is left behind.
+
+    """
+    started = time.perf_counter()
+    config = config or EstimatorConfig()
+    if compression not in COMPRESSION_CHOICES:
+        raise BagError(f'compression must be one of {", ".join(COMPRESSION_CHOICES)}, got '
+                       f'{compression!r}')
+    source = open_source(bag, config, remaps, pipeline)
+    pipelined = isinstance(source, ProcessSource)
+    staged = StagedOutputs()
+    sink: Sink | None = None
+    try:
+        core = core or estimator_from_config(config)
+        summary = ReplaySummary(bag=str(bag), storage=source.meta.storage)
+
+        def stage(path: str | Path | None, is_dir: bool, **kwargs: Any) -> Staged | None:
+            return None if path is None else staged.add(path, force, is_dir, **kwargs)
+
+        out = stage(out_bag, True, create=False, looks_like=looks_like_bag)  # the sink makes it
+        table = stage(csv_path, False)
+        figs = stage(plots_dir, True, looks_like=looks_like_plots)
+        if out is not None:
+            out_storage = storage or source.meta.storage
+            sink = open_sink(str(out.path), out_storage, pipelined,
+                             output_compression(compression, out_storage, source.meta))
+        with ExitStack() as stack:
+            csv_file = stack.enter_context(open(table.path, 'w', newline='')) if table \
+                else None
+            series = _run(source, core, config, summary, sink, csv_file, keep_estimates,
+                          progress)
+        if summary.estimates == 0:  # every sample skipped: say why rather than write nothing
+            raise BagError(_no_estimate_message(summary, core))
+        if sink is not None:
+            sink.close()
+            sink = None
+        if figs is not None:
+            from ..plots import write_replay_figures
+            write_replay_figures(series.data, figs.path, Path(bag).name, config)
+        staged.commit()
+        for item, kind in ((out, 'bag'), (table, 'csv'), (figs, 'plots')):
+            if item is not None:
+                summary.outputs[kind] = str(item.target)
+    except BaseException:
+        with sigint_held():  # a second Ctrl-C must not cut the clean-up short
+            if sink is not None:
+                sink.abort()
+            staged.discard()
+        raise
+    finally:
+        source.close()
+    summary.elapsed_s = time.perf_counter() - started
+    return summary
+
+
+_WHY = {
+    'rejected_missing_joint': 'no JointState names joint "{joint}", the joint_name parameter',
+    'rejected_malformed': 'JointState arrays empty or not as long as name',
+    'rejected_undecodable': 'messages that do not deserialise',
+    'rejected_future_stamp': 'header stamps more than max_stamp_lead_s ahead of the log time',
+    'rejected_non_finite': 'NaN or infinite values',
+    'rejected_out_of_range': 'implausible values',
+    'rejected_out_of_order': 'stamps going back in time',
+    'rejected_duplicate': 'repeated stamps',
+}
+
+
+def _no_estimate_message(summary: ReplaySummary, core: TorqueEstimator) -> str:
+    """Why a replay made no estimate: the skip counters that are not zero, largest first."""
+    counts = {k: v for k, v in summary.counts.items()
+              if v and k.startswith(('rejected', 'stale'))}
+    if not counts:
+        return f'bag {summary.bag}: no estimate made (no shaft-speed sample)'
+    parts = []
+    for name, n in sorted(counts.items(), key=lambda item: -item[1]):
+        why = core.last_stale_reason if name == 'stale_skips' else \
+            _WHY.get(name, '').format(joint=core.config.joint_name)
+        parts.append(f'{name} {n}' + (f' ({why})' if why else ''))
+    read = sum(summary.messages_read.values())
+    return f'bag {summary.bag}: no estimate made from {read} input messages: ' + \
+        ', '.join(parts)
+
+
+def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
+         summary: ReplaySummary, sink: Sink | None, csv_file: TextIO | None, keep_estimates: bool,
+         progress: bool) -> _Series:
+    """Consume `replay_events`: outputs, CSV rows, level intervals, the summary."""
+    from rosbags.typesys import get_typestore, Stores
+
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    types = rosbags_types(typestore)
+    rows = csv.writer(csv_file) if csv_file is not None else None
+    if rows is not None:
+        rows.writerow(CSV_COLUMNS)
+    status_name = f'{NODE_NAME}: {core.pump_name}'
+    meta = source.meta
+    start_ns = meta.start_ns
+    levels = LevelTracker()
+    series = _Series(core)
+    kept: list[Estimate] = []
+    last_stamp = start_ns
+    write = sink.write if sink is not None else None
+    with ProgressBar(f'replay {Path(summary.bag).name}', enabled=progress) as bar:
+        for log_ns, est in replay_events(source, core, round(1e9 / config.diagnostics_rate_hz),
+                                         bar):
+            if est is None:  # the node's diagnostics timer
+                if write is not None:
+                    msg = diagnostic_array(types, core.diagnostics(log_ns), log_ns,
+                                           status_name, config.hardware_id)
+                    write(DIAGNOSTICS_INDEX, log_ns, bytes(typestore.serialize_cdr(
+                        msg, 'diagnostic_msgs/msg/DiagnosticArray')))
+                continue
+            last_stamp = est.stamp_ns
+            levels.update(est.level, est.stamp_ns)
+            if keep_estimates:
+                kept.append(est)
+            if rows is not None:
+                rows.writerow(csv_row(est, start_ns))
+            if est.publish:
+                summary.published += 1
+                if write is not None:
+                    for name, v in outputs_of(est):
+                        write(OUTPUT_INDEX[name], log_ns, float64_cdr(v))
+                series.add(est, start_ns)
+    levels.finish(last_stamp)
+    stats = source.stats()
+    summary.duration_s = (meta.end_ns - start_ns) * 1e-9
+    summary.messages_read = dict(stats.messages_read)
+    summary.estimates = core.counts['estimates']
+    summary.counts = dict(core.counts)
+    summary.decoded_one_by_one = stats.fallbacks
+    summary.warn_intervals = [((a - start_ns) * 1e-9, (b - start_ns) * 1e-9)
+                              for a, b in levels.warn]
+    summary.error_intervals = [((a - start_ns) * 1e-9, (b - start_ns) * 1e-9)
+                               for a, b in levels.error]
+    if core.last is not None:
+        summary.final_level = core.last.level
+        summary.final_valve_plate_scale = core.last.valve_plate_scale
+        summary.final_valve_plate_scale_std = core.last.valve_plate_scale_std
+        summary.final_other_scale = core.monitor.theta_rest
+        summary.final_other_scale_std = core.monitor.rest_scale_std
+        summary.attribution = level_message(core.monitor.level, core.monitor)
+    if keep_estimates:
+        summary.estimates_list = kept
+    return series

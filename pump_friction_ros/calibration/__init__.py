@@ -1,0 +1,35 @@
+"""
+Calibration: fit a pump's open friction parameters to bench points or recorded bags.
+
+The friction model is linear, or very nearly, in the parameters a pump file leaves open
+(`FIT_PARAMETERS`: scales of the valve-plate, bearing, joint and head friction; from bags
+also the rotor inertia and a constant drive loss). The fit is bounded robust least squares
+(``scipy.optimize.least_squares``, soft-L1 loss); the parameter covariance
+s^2 (X^T X)^-1, inflated by the residuals' integral correlation time (samples of a 1 kHz
+record are not independent), gives 95 % intervals. A parameter whose interval is wider
+than half its reference value cannot be identified from the data (e.g. one speed cannot
+separate coulomb from viscous friction): it is reported, fixed at its base value and the
+fit repeated.
+
+Modules: `data` (bench CSV and bag samples), `fit` (regression, identifiability,
+cross-validation, inertia), `report` (result, pump file, report folder) and `pipeline`
+(`calibrate`, which runs them in turn).
+"""
+
+from .data import load_bag_samples, load_bench_csv, Samples
+from .fit import (
+    correlation_time,
+    FIT_PARAMETERS,
+    FitParameter,
+    fitted_pump,
+    INDEX,
+    NAMES,
+    regressors,
+)
+from .pipeline import calibrate
+from .report import CalibrationResult, ParameterReport
+from ..errors import CalibrationError
+
+__all__ = ['FIT_PARAMETERS', 'INDEX', 'NAMES', 'CalibrationError', 'CalibrationResult',
+           'FitParameter', 'ParameterReport', 'Samples', 'calibrate', 'correlation_time',
+           'fitted_pump', 'load_bag_samples', 'load_bench_csv', 'regressors']

@@ -1,0 +1,314 @@
+"""
+Run the evaluation bank: each scenario through the ROS-free core, reduced to one record.
+
+Each scenario is fed to a `TorqueEstimator` sample by sample as the node would see it
+(integer-ns stamps; JointState with speed and torque, FluidPressure, oil Temperature when
+used; at equal stamps temperature and pressure come before the joint state). The run is
+reduced on the fly: alarm entries (OK -> WARN or ERROR) before the onset, the first alarm at
+or after it, and the monitor's reading at the end (`read_monitor`), so memory does not grow
+with the number of estimates. Scenarios are deterministic per seed: the records are the same
+for any number of worker processes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from functools import lru_cache
+import math
+import os
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from .scenarios import Scenario, simulate_scenario, SimulatedScenario
+from .settings import BankSettings, FAMILIES, FAULTS
+from ..attribution import Verdict
+from ..config import EstimatorConfig, load_estimator_config
+from ..estimator import TorqueEstimator
+from ..inputs import InputKind
+from ..monitor import OK
+from ..params import load_pump, PumpParams
+from ..paths import config_dir
+from ..table import FrictionTable
+from ..table_io import cached_table
+
+__all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'build_scenarios',
+           'read_monitor', 'run_bank', 'run_scenario']
+
+_NS = 1_000_000_000
+_CHUNK = 1 << 16  # events converted to Python floats at a time (bounds memory)
+
+
+class MonitorReading(NamedTuple):
+    """What the bank reads from the wear monitor (the one interface it codes against)."""
+
+    level: int  # OK / WARN / ERROR
+    attribution: str  # one of settings.ATTRIBUTIONS; 'none' when the level is OK
+    vp_scale: float  # valve-plate friction scale [-]
+    vp_std: float  # its reported standard deviation [-]
+    other_scale: float  # scale of the other friction components [-]
+    other_std: float  # its reported standard deviation [-]
+
+
+def read_monitor(core: TorqueEstimator) -> MonitorReading:
+    """
+    Read level, attribution and friction scales from the estimator's monitor.
+
+    The only place that knows the monitor's attributes. The attribution is the verdict the
+    status message gives (``diagnostics.level_message``): the attribution filter's, for the
+    side of the model the torque is on; an alarm whose filter sees no term stand out yet
+    counts as 'cannot_tell'.
+
+    Parameters
+    ----------
+    core : TorqueEstimator
+        The estimator whose ``monitor`` to read.
+
+    Returns
+    -------
+    MonitorReading
+        The reading; attribution 'none' while the level is OK.
+
+    """
+    mon = core.monitor
+    level = int(mon.level)
+    attribution = 'none'
+    if level != OK:
+        side = 1.0 if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else -1.0
+        verdict = mon.attribution.verdict(side)[0]
+        attribution = 'cannot_tell' if verdict == Verdict.NONE else verdict
+    return MonitorReading(level, attribution, mon.theta_vp, mon.valve_plate_scale_std,
+                          mon.theta_rest, mon.rest_scale_std)
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """One run reduced to its figures (times in s from the start of the run)."""
+
+    scenario_id: str
+    family: str
+    fault: str
+    truth_class: str
+    seed: int  # replicate within (family, fault)
+    duration_s: float
+    onset_s: float  # inf for the nominal pump
+    alarm_entries_before_onset: int  # OK -> WARN/ERROR before the onset (whole nominal run)
+    first_alarm_s: float  # first sample at or after the onset at WARN or above; nan: none
+    final_level: int
+    attribution: str
+    vp_scale: float
+    vp_std: float
+    other_scale: float
+    other_std: float
+    vp_truth: float
+    other_truth: float
+    other_truth_exact: bool  # False: other_truth is a fitted ratio (one component faulty)
+    monitored_fraction: float  # joint-state samples the monitor learnt from
+    above_min_speed_fraction: float  # joint-state samples with |speed| >= monitor min speed
+
+    @property
+    def delay_s(self) -> float:
+        """Return the detection delay from the onset [s]; inf when not detected."""
+        return self.first_alarm_s - self.onset_s if math.isfinite(self.first_alarm_s) \
+            else math.inf
+
+
+@dataclass(frozen=True)
+class BankResult:
+    """Records of a bank (in scenario order) and how long it took."""
+
+    settings: BankSettings
+    seed: int
+    workers: int
+    records: list[RunRecord]
+    runtime_s: float  # wall time
+    cpu_s: float  # CPU time of this process and its workers
+
+
+@lru_cache(maxsize=1)
+def _pump_and_table() -> tuple[PumpParams, FrictionTable]:
+    params = load_pump(None)
+    return params, cached_table(params)
+
+
+def base_config() -> EstimatorConfig:
+    """
+    Read the node's parameters as shipped (``config/torque_estimator.yaml``).
+
+    Returns
+    -------
+    EstimatorConfig
+        The configuration the bank runs the estimator with (and the truth's plant constants).
+
+    """
+    return load_estimator_config(config_dir() / 'torque_estimator.yaml')
+
+
+def build_scenarios(settings: BankSettings, seed: int = 0,
+                    config: EstimatorConfig | None = None) -> list[Scenario]:
+    """
+    All scenarios of a bank, onsets drawn from the seed.
+
+    Parameters
+    ----------
+    settings : BankSettings
+        Size of the bank.
+    seed : int
+        Bank seed: the same seed gives the same scenarios and signals.
+    config : EstimatorConfig, optional
+        Estimator configuration (default `base_config`).
+
+    Returns
+    -------
+    list of Scenario
+        Family by family, fault by fault, replicate by replicate.
+
+    """
+    config = config or base_config()
+    scenarios = []
+    for family in FAMILIES:
+        if settings.families is not None and family.name not in settings.families:
+            continue
+        for fault in FAULTS:
+            if settings.faults is not None and fault.name not in settings.faults:
+                continue
+            nominal = fault.truth_class == 'nominal'
+            for rep in range(settings.nominal_seeds if nominal else settings.fault_seeds):
+                duration = settings.nominal_duration_s if nominal else settings.fault_duration_s
+                draft = Scenario(family, fault, rep, duration, math.inf, settings.ramp_s, seed,
+                                 config)
+                onset = math.inf if nominal else duration * float(
+                    np.random.default_rng([*draft.seed_key, 1]).uniform(
+                        *settings.onset_fraction))
+                scenarios.append(Scenario(family, fault, rep, duration, onset,
+                                          settings.ramp_s, seed, config))
+    return scenarios
+
+
+def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
+          ) -> tuple[int, int | None]:
+    """Feed the signals in stamp order; return alarm entries before the onset, first alarm."""
+    stamps = [np.round(x * 1e9).astype(np.int64)
+              for x in (sim.temperature_t_s, sim.pressure_t_s, sim.t_s)]
+    kinds = np.concatenate([np.full(s.size, k, dtype=np.int8) for k, s in enumerate(stamps)])
+    stamp = np.concatenate(stamps)
+    first_value = np.concatenate([sim.temperature_c, sim.pressure_diff_pa, sim.speed_rad_s])
+    torque = np.concatenate([np.zeros(stamps[0].size + stamps[1].size), sim.torque_nm])
+    order = np.argsort(stamp, kind='stable')  # ties: temperature, pressure, joint state
+    on_input = core.on_input  # the node's one entry point, as its callbacks call it
+    temperature, pressure, joint = (InputKind.OIL_TEMPERATURE, InputKind.LOAD_PRESSURE,
+                                    InputKind.JOINT_STATE)
+    previous, before, first = OK, 0, None
+    for start in range(0, order.size, _CHUNK):
+        part = order[start:start + _CHUNK]
+        for ns, kind, value, tq in zip(stamp[part].tolist(), kinds[part].tolist(),
+                                       first_value[part].tolist(), torque[part].tolist(),
+                                       strict=True):
+            if kind == 2:
+                est = on_input(joint, ns, value, tq, ns)
+                if est is None:
+                    continue
+                level = est.level  # the level the node publishes with this estimate
+                if level != previous:
+                    if previous == OK and ns < onset_ns:
+                        before += 1
+                    previous = level
+                if level and first is None and ns >= onset_ns:
+                    first = ns
+            elif kind == 1:
+                on_input(pressure, ns, value, None, ns)
+            else:
+                on_input(temperature, ns, value, None, ns)
+    return before, first
+
+
+def run_scenario(scenario: Scenario) -> RunRecord:
+    """
+    Simulate one scenario, feed it to a fresh estimator, reduce it to a record.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        What to run.
+
+    Returns
+    -------
+    RunRecord
+        The run's figures.
+
+    """
+    params, table = _pump_and_table()
+    sim = simulate_scenario(scenario, table)
+    core = TorqueEstimator(scenario.estimator_config(), table, params.oil.viscosity_m2_s,
+                           params.name)
+    onset_ns = scenario.onset_s * 1e9
+    before, first = _feed(core, sim, onset_ns)
+    reading = read_monitor(core)
+    fault = scenario.fault
+    return RunRecord(
+        scenario_id=scenario.scenario_id, family=scenario.family.name, fault=fault.name,
+        truth_class=fault.truth_class, seed=scenario.replicate,
+        duration_s=scenario.duration_s, onset_s=scenario.onset_s,
+        alarm_entries_before_onset=before,
+        first_alarm_s=math.nan if first is None else first / _NS,
+        final_level=reading.level, attribution=reading.attribution,
+        vp_scale=reading.vp_scale, vp_std=reading.vp_std, other_scale=reading.other_scale,
+        other_std=reading.other_std, vp_truth=sim.vp_truth, other_truth=sim.other_truth,
+        other_truth_exact=sim.other_truth_exact,
+        monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,
+        above_min_speed_fraction=sim.above_min_speed_fraction)
+
+
+def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,
+             config: EstimatorConfig | None = None,
+             progress: Callable[[int, int], None] | None = None) -> BankResult:
+    """
+    Run every scenario of a bank, in this process or in ``workers`` processes.
+
+    Parameters
+    ----------
+    settings : BankSettings
+        Size of the bank (`settings.QUICK`, `settings.FULL` or your own).
+    workers : int
+        Worker processes (1: in this process).
+    seed : int
+        Bank seed.
+    config : EstimatorConfig, optional
+        Estimator configuration (default `base_config`).
+    progress : callable, optional
+        Called with (runs done, runs in all) after each run.
+
+    Returns
+    -------
+    BankResult
+        Records in scenario order (identical for any ``workers``) and the wall time.
+
+    """
+    if workers < 1:
+        raise ValueError('workers must be >= 1')
+    scenarios = build_scenarios(settings, seed, config)
+    _pump_and_table()  # build / load the table once, before any worker starts
+    start, cpu_start = time.perf_counter(), _cpu_s()
+    records: list[RunRecord] = []
+    if workers == 1 or len(scenarios) <= 1:
+        for scenario in scenarios:
+            records.append(run_scenario(scenario))
+            if progress:
+                progress(len(records), len(scenarios))
+    else:
+        with ProcessPoolExecutor(max_workers=min(workers, len(scenarios))) as pool:
+            for record in pool.map(run_scenario, scenarios):
+                records.append(record)
+                if progress:
+                    progress(len(records), len(scenarios))
+    return BankResult(settings, seed, workers, records, time.perf_counter() - start,
+                      _cpu_s() - cpu_start)
+
+
+def _cpu_s() -> float:
+    """CPU time of this process and of its waited-for children [s]."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system

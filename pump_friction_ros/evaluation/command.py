@@ -1,0 +1,49 @@
+"""``pump_friction evaluate-monitor``: run the bank, print its table, optionally save it all."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .bank import run_bank
+from .report import bank_figures, format_table, write_outputs
+from .settings import FULL, QUICK
+from ..progress import ProgressBar
+
+__all__ = ['evaluate_monitor']
+
+
+def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | None = None,
+                     seed: int = 0, progress: bool = True) -> int:
+    """
+    Run the evaluation bank with the current monitor and print one table.
+
+    Parameters
+    ----------
+    quick : bool
+        The test-suite bank (`settings.QUICK`) instead of the benchmark (`settings.FULL`).
+    workers : int
+        Worker processes.
+    out : str or Path, optional
+        Folder for records.csv, figures.json, table.md and the PNG plots.
+    seed : int
+        Bank seed.
+    progress : bool
+        Progress bar on a terminal.
+
+    Returns
+    -------
+    int
+        Exit code 0.
+
+    """
+    settings = QUICK if quick else FULL
+    with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
+        result = run_bank(settings, workers=workers, seed=seed,
+                          progress=lambda done, total: bar(done / total))
+    figures = bank_figures(result.records)
+    table = format_table(figures, result)
+    print(table)
+    if out is not None:
+        for path in write_outputs(result, figures, table, Path(out)):
+            print(path)
+    return 0

@@ -1,0 +1,314 @@
+"""
+Every number of the monitor evaluation bank, in one place, with its meaning.
+
+Duty-cycle families (`FAMILIES`), faults (`FAULTS`), sensor and load settings
+(`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges ``(low, high)`` are
+drawn uniformly per scenario from its seed. The plant constants that the estimator must
+share with the truth (rotor inertia, nominal drive loss, oil viscosity and its 40 / 100 degC
+law) are not here: they come from the package's node parameters
+(``config/torque_estimator.yaml``), so that the estimator is configured as the truth is.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+__all__ = [
+    'ACCEPTED_ATTRIBUTIONS',
+    'ATTRIBUTIONS',
+    'FAMILIES',
+    'FAULTS',
+    'FULL',
+    'QUICK',
+    'BankSettings',
+    'CreepSettings',
+    'CruiseSettings',
+    'Family',
+    'Fault',
+    'HighDynamicsSettings',
+    'SetpointLagSettings',
+    'SignalSettings',
+    'SineSettings',
+    'TrapezoidSettings',
+    'WarmUpSettings',
+]
+
+Range = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class SignalSettings:
+    """Sampling, sensor noise and load of a scenario (SI; per family, see `Family`)."""
+
+    joint_rate_hz: float = 1000.0
+    """JointState rate: speed and measured torque [Hz]."""
+    pressure_rate_hz: float = 500.0
+    """FluidPressure rate (pressure difference p_A - p_B) [Hz]."""
+    temperature_rate_hz: float = 10.0
+    """Oil Temperature rate, when the family uses it [Hz]."""
+    torque_noise_nm: float = 0.05
+    """Std of the white noise on the measured motor torque [N m]."""
+    speed_noise_rad_s: float = 0.5
+    """Std of the white noise on the measured shaft speed [rad/s]."""
+    pressure_noise_pa: float = 1.0e5
+    """Std of the white noise on the measured pressure difference [Pa]."""
+    temperature_noise_c: float = 0.2
+    """Std of the white noise on the measured oil temperature [degC]."""
+    load_pressure_pa: Range = (40e5, 220e5)
+    """Gravity-like load: the static pressure difference swings between these [Pa]."""
+    load_period_s: Range = (15.0, 40.0)
+    """Period of the sinusoidal swing of the static load [s]."""
+    damping_pa_per_rad_s: float = 2.0e3
+    """Damping: dp += damping x speed [Pa/(rad/s)]; retracting then runs the pump as a motor."""
+
+
+@dataclass(frozen=True)
+class TrapezoidSettings:
+    """Family 1: the moves of ``simulate.trapezoid_speed_profile`` (its `DutyCycle` fields)."""
+
+    max_speed_rad_s: float = 900.0
+    """Largest cruise speed of a move [rad/s] (~8,600 rpm)."""
+    min_speed_rad_s: float = 150.0
+    """Smallest cruise speed of a move [rad/s]."""
+    accel_time_s: Range = (0.05, 0.15)
+    """Duration of each (cosine-smoothed) ramp [s]."""
+    cruise_time_s: Range = (0.3, 1.5)
+    """Duration of the cruise of a move [s]."""
+    dwell_time_s: Range = (0.05, 0.6)
+    """Standstill between moves [s]."""
+
+
+@dataclass(frozen=True)
+class SineSettings:
+    """
+    Family 2: sinusoidal positioning, speed = A sin(2 pi t / T1) + B sin(2 pi t / T2).
+
+    The issue's example is A = 6000 rpm (628 rad/s), T1 = 8 s, B = 2500 rpm (262 rad/s),
+    T2 = 2.3 s; the defaults bracket it.
+    """
+
+    amplitude_1_rad_s: Range = (400.0, 700.0)
+    """A [rad/s]."""
+    period_1_s: Range = (6.0, 10.0)
+    """T1 [s]."""
+    amplitude_2_rad_s: Range = (150.0, 300.0)
+    """B [rad/s]."""
+    period_2_s: Range = (1.8, 3.0)
+    """T2 [s]."""
+
+
+@dataclass(frozen=True)
+class SetpointLagSettings:
+    """Family 3: random speed setpoints reached through a first-order lag."""
+
+    setpoint_rad_s: Range = (100.0, 900.0)
+    """|setpoint| of a moving segment [rad/s]; the sign is random."""
+    stop_probability: float = 0.2
+    """Probability that a segment's setpoint is standstill [-]."""
+    hold_time_s: Range = (0.5, 4.0)
+    """How long each setpoint is held [s]."""
+    lag_time_constant_s: Range = (0.08, 0.4)
+    """Time constant of the lag (drawn once per scenario) [s]."""
+
+
+@dataclass(frozen=True)
+class CruiseSettings:
+    """
+    Family 4: long cruise at one speed with slow small variations.
+
+    speed = S r(t) (1 + a sin(2 pi t / T + phase)), r a cosine spin-up from rest.
+    """
+
+    speed_rad_s: Range = (300.0, 1000.0)
+    """|S| [rad/s]; the sign is random."""
+    variation: Range = (0.02, 0.08)
+    """Relative amplitude a of the slow variation [-]."""
+    variation_period_s: Range = (20.0, 90.0)
+    """Period T of the slow variation [s]."""
+    spin_up_s: float = 3.0
+    """Duration of the spin-up from rest [s]."""
+
+
+@dataclass(frozen=True)
+class CreepSettings:
+    """Family 5: low-speed creep with many reversals, speed = A sin(2 pi t / T1) + B sin(...)."""
+
+    amplitude_1_rad_s: Range = (10.0, 45.0)
+    """A [rad/s] (the monitor learns only above ``monitor_min_speed_rad_s``, 20 by default)."""
+    period_1_s: Range = (1.0, 4.0)
+    """T1 [s]: two reversals per period."""
+    amplitude_2_rad_s: Range = (0.0, 15.0)
+    """B [rad/s]."""
+    period_2_s: Range = (0.3, 1.0)
+    """T2 [s]."""
+
+
+@dataclass(frozen=True)
+class WarmUpSettings:
+    """
+    Family 6: oil warm-up under trapezoidal moves, with the temperature input.
+
+    T(t) = T0 + (T1 - T0) (1 - exp(-t / tau)) / (1 - exp(-D / tau)), tau = fraction x D for
+    a run of duration D: T0 at the start, exactly T1 at the end. The truth viscosity follows
+    ASTM D341 (`oil.WaltherViscosity`) through the node parameters' 40 and 100 degC values;
+    the estimator runs with ``viscosity_source: temperature``.
+    """
+
+    start_c: float = 30.0
+    """Oil temperature at the start [degC]."""
+    end_c: float = 60.0
+    """Oil temperature at the end [degC]."""
+    time_constant_fraction: float = 0.3
+    """Warm-up time constant as a fraction of the run [-]."""
+    moves: TrapezoidSettings = field(default_factory=TrapezoidSettings)
+    """The duty cycle during the warm-up."""
+
+
+@dataclass(frozen=True)
+class HighDynamicsSettings:
+    """
+    Family 7: back-and-forth moves that spend most of the time above the monitor's accel gate.
+
+    Alternating peaks, each reached by a cosine-smoothed ramp of mean acceleration drawn
+    from ``mean_accel_rad_s2`` (peak acceleration pi / 2 times that), held for a short dwell.
+    """
+
+    peak_speed_rad_s: Range = (200.0, 900.0)
+    """|peak speed| [rad/s]; peaks alternate in sign."""
+    mean_accel_rad_s2: Range = (800.0, 3000.0)
+    """Mean acceleration of a ramp between peaks [rad/s^2]."""
+    peak_dwell_s: Range = (0.0, 0.1)
+    """Hold at each peak [s]."""
+
+
+Motion = (TrapezoidSettings | SineSettings | SetpointLagSettings | CruiseSettings
+          | CreepSettings | WarmUpSettings | HighDynamicsSettings)
+
+
+@dataclass(frozen=True)
+class Family:
+    """A duty-cycle family: a name, a short column label, its motion and its signals."""
+
+    name: str
+    label: str
+    motion: Motion
+    signals: SignalSettings = field(default_factory=SignalSettings)
+
+    @property
+    def uses_temperature(self) -> bool:
+        """Return whether the family feeds oil temperature and runs the estimator on it."""
+        return isinstance(self.motion, WarmUpSettings)
+
+
+FAMILIES: tuple[Family, ...] = (
+    Family('trapezoid', 'trap', TrapezoidSettings()),
+    Family('sine', 'sine', SineSettings()),
+    Family('setpoint_lag', 'lag', SetpointLagSettings()),
+    Family('cruise', 'cruise', CruiseSettings(), SignalSettings(load_period_s=(40.0, 120.0))),
+    Family('creep', 'creep', CreepSettings()),
+    Family('warm_up', 'warm', WarmUpSettings()),
+    Family('high_dynamics', 'dyn', HighDynamicsSettings()),
+)
+"""The duty-cycle families, in table order."""
+
+ATTRIBUTIONS = ('valve_plate', 'other_friction', 'not_friction', 'cannot_tell', 'none')
+"""Possible attributions of a monitor reading ('none': no alarm), in table order."""
+
+
+@dataclass(frozen=True)
+class Fault:
+    """
+    A fault applied as a step at the scenario's onset (the valve-plate ramp: a ramp).
+
+    Friction factors multiply one friction component of the true pump each; the drive loss
+    is added opposing the motion (extra x tanh(speed / zero-speed threshold)); the offset is
+    added to the measured motor torque; the gain multiplies the measured pressure difference.
+    """
+
+    name: str
+    truth_class: str
+    """'nominal', 'valve_plate', 'other_friction', 'drive_loss' or 'not_friction'."""
+    size: float = 1.0
+    """Fault size on the x axis of the delay plot (the factor, the extra torque, the gain)."""
+    valve_plate: float = 1.0
+    """Friction factor of the valve plate [-] (reached at the end of the ramp if ``ramp``)."""
+    bearing: float = 1.0
+    """Friction factor of the shaft bearing [-]."""
+    spherical_joints: float = 1.0
+    """Friction factor of the spherical joints [-]."""
+    piston_heads: float = 1.0
+    """Friction factor of the piston heads [-]."""
+    ramp: bool = False
+    """The valve-plate factor ramps linearly from 1 over `BankSettings.ramp_s`."""
+    drive_loss_nm: float = 0.0
+    """Extra constant drive loss opposing the motion [N m]."""
+    torque_offset_nm: float = 0.0
+    """Offset of the measured-torque sensor [N m]."""
+    pressure_gain: float = 1.0
+    """Gain of the pressure sensor: measured dp = gain x true dp [-]."""
+
+    @property
+    def factors(self) -> dict[str, float]:
+        """Friction factor of each component (``model.COMPONENTS`` names) [-]."""
+        return {'valve_plate': self.valve_plate, 'bearing': self.bearing,
+                'spherical_joints': self.spherical_joints, 'piston_heads': self.piston_heads}
+
+
+FAULTS: tuple[Fault, ...] = (
+    Fault('nominal', 'nominal'),
+    Fault('valve_plate_x1.2', 'valve_plate', 1.2, valve_plate=1.2),
+    Fault('valve_plate_x1.6', 'valve_plate', 1.6, valve_plate=1.6),
+    Fault('valve_plate_x2.0', 'valve_plate', 2.0, valve_plate=2.0),
+    Fault('valve_plate_ramp_1.5', 'valve_plate', 1.5, valve_plate=1.5, ramp=True),
+    Fault('bearing_x1.8', 'other_friction', 1.8, bearing=1.8),
+    Fault('joints_x3', 'other_friction', 3.0, spherical_joints=3.0),
+    Fault('drive_loss_+0.2nm', 'drive_loss', 0.2, drive_loss_nm=0.2),
+    Fault('torque_offset_+0.2nm', 'not_friction', 0.2, torque_offset_nm=0.2),
+    Fault('pressure_gain_1.05', 'not_friction', 1.05, pressure_gain=1.05),
+)
+"""The faults, in table order; the first is the nominal pump."""
+
+ACCEPTED_ATTRIBUTIONS: dict[str, frozenset[str]] = {
+    'nominal': frozenset({'none'}),
+    'valve_plate': frozenset({'valve_plate'}),
+    'other_friction': frozenset({'other_friction'}),
+    'not_friction': frozenset({'not_friction'}),
+    # a drive loss may fairly read as other friction or as not friction: wrong only if the
+    # valve plate is named (or nothing is)
+    'drive_loss': frozenset({'other_friction', 'not_friction', 'cannot_tell'}),
+}
+"""Final attributions counted as correct, per true fault class."""
+
+
+@dataclass(frozen=True)
+class BankSettings:
+    """Size of a bank: replicates (seeds) and run lengths."""
+
+    name: str
+    nominal_seeds: int
+    """Nominal runs per family."""
+    nominal_duration_s: float
+    """Length of a nominal run [s]."""
+    fault_seeds: int
+    """Runs per family and fault."""
+    fault_duration_s: float
+    """Length of a fault run [s]."""
+    ramp_s: float
+    """Duration of the valve-plate ramp fault [s]."""
+    onset_fraction: Range = (0.4, 0.6)
+    """The fault starts at this fraction of the run [-]."""
+    families: tuple[str, ...] | None = None
+    """Only these families (None: all)."""
+    faults: tuple[str, ...] | None = None
+    """Only these faults (None: all)."""
+
+
+QUICK = BankSettings('quick', nominal_seeds=2, nominal_duration_s=150.0, fault_seeds=1,
+                     fault_duration_s=150.0, ramp_s=40.0)
+"""The test-suite bank: about a minute on 2 cores (~3.2 h simulated, 0.58 h nominal)."""
+
+FULL = BankSettings('full', nominal_seeds=6, nominal_duration_s=900.0, fault_seeds=5,
+                    fault_duration_s=600.0, ramp_s=180.0)
+"""
+The benchmark bank: 7 x 6 x 900 s = 10.5 h of nominal running, 7 x 9 x 5 x 600 s = 52.5 h
+of fault runs (half of it before the onset)."""

@@ -1,0 +1,142 @@
+"""
+Filtered shaft acceleration: two first-order low-pass stages and the derivative of the second.
+
+Each stage is the exact discretisation of tau y' = x - y for an input linear between samples
+(first-order hold): y_k = b y_k-1 + a x_k-1 + c (x_k - x_k-1), with b = exp(-dt / tau),
+a = 1 - b, c = 1 - tau a / dt. A ramp then lags by exactly tau per stage at any sample
+spacing, and (lp1 - lp2) / tau is the slope of lp2. The estimator runs the scalar form
+(`SpeedFilter`) sample by sample; the calibration runs the array form (`filter_two_stage`)
+over a record. Both are the same recursion (tested equal).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ['SpeedFilter', 'filter_two_stage', 'stage_coefficients']
+
+
+def stage_coefficients(dt_s: float, tau_s: float) -> tuple[float, float, float]:
+    """
+    Return (b, a, c) of one first-order-hold low-pass stage.
+
+    Parameters
+    ----------
+    dt_s : float
+        Sample spacing [s], > 0.
+    tau_s : float
+        Time constant [s], > 0.
+
+    Returns
+    -------
+    tuple of float
+        b = exp(-dt / tau), a = 1 - b, c = 1 - tau a / dt.
+
+    """
+    b = math.exp(-dt_s / tau_s)
+    a = 1.0 - b
+    return b, a, 1.0 - tau_s * a / dt_s
+
+
+class SpeedFilter:
+    """
+    Two low-pass stages of the shaft speed and the filtered acceleration, sample by sample.
+
+    Parameters
+    ----------
+    tau_s : float
+        Time constant of each stage [s].
+    max_gap_ns : int
+        A gap longer than this between samples restarts the filter (no derivative across);
+        so does a step back in time (the source's clock restarted, see the estimator's
+        ``stamp_resync_samples``).
+
+    """
+
+    def __init__(self, tau_s: float, max_gap_ns: int) -> None:
+        self.tau_s = tau_s
+        self.max_gap_ns = max_gap_ns
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the state: the next sample restarts the filter at rest."""
+        self._lp1 = self._lp2 = self._x_prev = 0.0
+        self._step_ns = -1
+        self._coefficients = (0.0, 0.0, 0.0)
+        self._last_ns: int | None = None
+        self.accel_rad_s2 = 0.0
+
+    @property
+    def filtered_speed_rad_s(self) -> float:
+        """Output of the second stage [rad/s]: what `filter_two_stage` gives for the record."""
+        return self._lp2
+
+    def update(self, stamp_ns: int, speed_rad_s: float) -> float:
+        """
+        Take one speed sample and return the filtered acceleration.
+
+        Stamps normally increase; a gap above ``max_gap_ns`` or a step that is not forward
+        (a clock restart) restarts the filter at rest on this sample.
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Sample time [ns].
+        speed_rad_s : float
+            Shaft speed [rad/s].
+
+        Returns
+        -------
+        float
+            Filtered acceleration [rad/s^2]; 0 at a (re)start.
+
+        """
+        last = self._last_ns
+        self._last_ns = stamp_ns
+        if last is None or not 0 < stamp_ns - last <= self.max_gap_ns:
+            self._lp1 = self._lp2 = self._x_prev = speed_rad_s  # (re)start at rest
+            self.accel_rad_s2 = 0.0
+            return 0.0
+        step_ns = stamp_ns - last
+        if step_ns != self._step_ns:  # evenly spaced samples: coefficients once
+            self._coefficients = stage_coefficients(step_ns * 1e-9, self.tau_s)
+            self._step_ns = step_ns
+        b, a, c = self._coefficients
+        lp1_old = self._lp1
+        x_prev = self._x_prev
+        self._lp1 = b * lp1_old + a * x_prev + c * (speed_rad_s - x_prev)
+        self._lp2 = b * self._lp2 + a * lp1_old + c * (self._lp1 - lp1_old)
+        self._x_prev = speed_rad_s
+        self.accel_rad_s2 = (self._lp1 - self._lp2) / self.tau_s
+        return self.accel_rad_s2
+
+
+def filter_two_stage(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
+    """
+    Apply the two low-pass stages to an evenly sampled record, starting at rest on x[0].
+
+    Parameters
+    ----------
+    x : ndarray
+        Samples, evenly spaced in time.
+    dt_s : float
+        Sample spacing [s].
+    tau_s : float
+        Time constant of each stage [s].
+
+    Returns
+    -------
+    ndarray
+        The output of the second stage (same unit as ``x``).
+
+    """
+    from scipy.signal import lfilter
+
+    b, a, c = stage_coefficients(dt_s, tau_s)
+    num, den = [c, a - c], [1.0, -b]
+    y = np.asarray(x, dtype=float)
+    for _ in range(2):
+        y = lfilter(num, den, y - y[0]) + y[0]
+    return y

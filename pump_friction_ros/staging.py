@@ -1,0 +1,253 @@
+"""
+Outputs written atomically: staged under a temporary name beside the target, then moved.
+
+Every output of the command line (replay bags, CSV and plots; calibrated pump files and
+reports; tables) goes through `Staged`: the target is checked (an existing output is
+replaced only with ``force``, and only if it is of the same kind), its folder is made, and
+the output is written under a hidden temporary name in that folder and renamed into place
+by `Staged.commit`. A failed or interrupted run calls `Staged.discard`, which removes the
+temporary output and the folders the staging made, so nothing that looks complete is left.
+Errors are one line naming the target, never a temporary name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+import os
+from pathlib import Path
+import shutil
+import signal
+import tempfile
+import threading
+
+from .errors import OutputError
+
+__all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
+           'looks_like_plots', 'remove_empty_folders', 'sigint_held']
+
+
+@contextmanager
+def sigint_held() -> Iterator[None]:
+    """
+    Hold Ctrl-C back for a moment that must not be cut in two; deliver it afterwards.
+
+    Used while outputs are staged or moved into place (all or none), while a run cleans up
+    after a failure or a first Ctrl-C, and while a helper process starts: the signal is
+    blocked in this thread, which a child inherits (so a Ctrl-C in the instant between its
+    start and its own handler setup cannot raise KeyboardInterrupt in it), and in the main
+    thread Python's handler is swapped for one that only notes the signal (another thread
+    may receive it). A Ctrl-C noted meanwhile is handed to the previous handler at the end.
+    """
+    noted: list[int] = []
+    previous = signal.getsignal(signal.SIGINT)
+    in_main = threading.current_thread() is threading.main_thread() and previous is not None
+    if in_main:  # (None: a handler not set from Python, left alone)
+        signal.signal(signal.SIGINT, lambda signum, _: noted.append(signum))
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        if in_main:
+            signal.signal(signal.SIGINT, previous)
+            if noted and callable(previous):
+                previous(signal.SIGINT, None)  # e.g. raises KeyboardInterrupt now
+
+
+def looks_like_bag(path: Path) -> bool:
+    """Whether an existing folder is a rosbag2 bag (``metadata.yaml`` in it)."""
+    return (path / 'metadata.yaml').is_file()
+
+
+def looks_like_plots(path: Path) -> bool:
+    """Whether an existing folder holds only PNG files (an earlier run's plots)."""
+    return all(p.is_file() and p.suffix == '.png' for p in path.iterdir())
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or type(exc).__name__
+
+
+def remove_empty_folders(folders: list[Path]) -> None:
+    """
+    Remove the folders given that are empty, deepest first (errors ignored).
+
+    Parameters
+    ----------
+    folders : list of Path
+        Folders this run created.
+
+    """
+    for folder in sorted(folders, key=lambda p: len(p.parts), reverse=True):
+        try:
+            folder.rmdir()
+        except OSError:
+            pass  # not empty (another output is in it) or already gone
+
+
+def _make_folder(folder: Path, target: Path) -> list[Path]:
+    """Make ``folder`` and its missing parents; return those made, outermost first."""
+    missing = []
+    for parent in (folder, *folder.parents):
+        if parent.is_dir():
+            break
+        if parent.exists() or parent.is_symlink():
+            raise OutputError(f'cannot create the output {target}: {parent} is not a folder')
+        missing.append(parent)
+    made: list[Path] = []
+    try:
+        for parent in reversed(missing):
+            parent.mkdir()
+            made.append(parent)
+    except OSError as exc:
+        remove_empty_folders(made)
+        raise OutputError(f'cannot create the output {target}: cannot make the folder '
+                          f'{parent} ({_reason(exc)})') from None
+    return made
+
+
+class Staged:
+    """
+    An output path written under a temporary name and moved into place by `commit`.
+
+    Parameters
+    ----------
+    target : Path
+        Where the output goes.
+    force : bool
+        Replace an existing output of the same kind.
+    is_dir : bool
+        The output is a folder (plots, a report, a bag) rather than a file.
+    create : bool
+        Make the (empty) staged folder now; False for a folder its writer creates (a bag).
+    looks_like : callable, optional
+        For a folder: whether an existing one is an earlier output of this kind, which
+        ``force`` may replace (an empty folder always may). Without it any folder may be.
+
+    Raises
+    ------
+    OutputError
+        The target exists (without ``force``), is of another kind, or cannot be made.
+
+    """
+
+    def __init__(self, target: str | Path, force: bool, is_dir: bool, *, create: bool = True,
+                 looks_like: Callable[[Path], bool] | None = None) -> None:
+        target = Path(target)
+        self.target = target
+        if target.exists():
+            if not force:
+                raise OutputError(f'output exists: {target} (remove it, choose another path, '
+                                  'or pass --force)')
+            if target.is_dir() != is_dir:
+                want, found = ('a folder', 'a file') if is_dir else ('a file', 'a folder')
+                raise OutputError(f'output {target} is {found}, expected {want}: not '
+                                  'replaced')
+            if is_dir and looks_like is not None and any(target.iterdir()) and \
+                    not looks_like(target):
+                raise OutputError(f'output {target} is a folder that does not look like an '
+                                  'earlier output of this kind: not replaced (remove it '
+                                  'yourself or choose another path)')
+        self._made = _make_folder(target.parent, target)
+        try:
+            self._tmp_parent = Path(tempfile.mkdtemp(prefix=f'.{target.name}.partial-',
+                                                     dir=target.parent))
+        except OSError as exc:
+            remove_empty_folders(self._made)
+            raise OutputError(f'cannot create the output {target}: cannot write in '
+                              f'{target.parent} ({_reason(exc)})') from None
+        self.path = self._tmp_parent / target.name
+        if is_dir and create:
+            self.path.mkdir()
+
+    def commit(self) -> None:
+        """Move the output into place (replacing an old one) and remove the staging folder."""
+        try:
+            if self.target.is_dir() and not self.target.is_symlink():
+                shutil.rmtree(self.target)
+            elif self.target.exists() or self.target.is_symlink():
+                self.target.unlink()
+            os.replace(self.path, self.target)
+        except OSError as exc:
+            self.discard()
+            raise OutputError(f'cannot write the output {self.target}: {_reason(exc)}') \
+                from None
+        shutil.rmtree(self._tmp_parent, ignore_errors=True)
+        self._made = []
+
+    def discard(self) -> None:
+        """Remove the staged output and the folders made for it (if left empty)."""
+        shutil.rmtree(self._tmp_parent, ignore_errors=True)
+        remove_empty_folders(self._made)
+
+
+def commit_all(staged: list[Staged]) -> None:
+    """
+    Commit several staged outputs, with Ctrl-C held back until all are in place.
+
+    If one fails, the ones not yet committed are discarded.
+
+    Parameters
+    ----------
+    staged : list of Staged
+        The outputs, all written.
+
+    """
+    with sigint_held():
+        for k, item in enumerate(staged):
+            try:
+                item.commit()
+            except BaseException:
+                discard_all(staged[k + 1:])
+                raise
+
+
+def discard_all(staged: list[Staged]) -> None:
+    """
+    Discard several staged outputs (after a failure or an interrupt).
+
+    Parameters
+    ----------
+    staged : list of Staged
+        The outputs.
+
+    """
+    for item in reversed(staged):
+        item.discard()
+
+
+class StagedOutputs:
+    """
+    The outputs of one run: staged together, committed together, discarded together.
+
+    `add` stages an output and records it with Ctrl-C held back, so that an interrupt can
+    never leave a staging folder that `discard` does not know of.
+    """
+
+    def __init__(self) -> None:
+        self.items: list[Staged] = []
+
+    def add(self, target: str | Path, force: bool, is_dir: bool, **kwargs) -> Staged:
+        """
+        Stage one output (see `Staged` for the arguments).
+
+        Returns
+        -------
+        Staged
+            The staged output; write to its ``path``.
+
+        """
+        with sigint_held():
+            item = Staged(target, force, is_dir, **kwargs)
+            self.items.append(item)
+        return item
+
+    def commit(self) -> None:
+        """Move every output into place (`commit_all`)."""
+        commit_all(self.items)
+
+    def discard(self) -> None:
+        """Remove every staged output and the folders made for them (Ctrl-C held back)."""
+        with sigint_held():
+            discard_all(self.items)

@@ -1,0 +1,587 @@
+"""
+Bad input and ordinary mistakes, through the command line as a user meets them (issue 11).
+
+Every case writes its input in ``tmp_path`` and runs ``pump_friction`` in a subprocess with
+a timeout, so a hang fails the test instead of stalling it. A refused input gives one line
+on stderr, exit code 2, no traceback and no output; a skipped message is counted and
+reported with exit code 0.
+"""
+
+import os
+from pathlib import Path
+import subprocess
+import sys
+
+import pytest
+
+from .conftest import PAPER_PUMP
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope='module')
+def env(tmp_path_factory):
+    """Environment of the subprocesses: a private table cache shared by this module."""
+    values = dict(os.environ)
+    values['XDG_CACHE_HOME'] = str(tmp_path_factory.mktemp('cache'))
+    values['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO),
+                                                         values.get('PYTHONPATH', '')]))
+    return values
+
+
+def cli(env, *argv, cwd=None, timeout=60):
+    """Run ``pump_friction`` in a subprocess; a hang fails the test after ``timeout`` s."""
+    return subprocess.run([sys.executable, '-m', 'pump_friction_ros.cli', *map(str, argv)],
+                          capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env,
+                          check=False)
+
+
+def refused(proc, *words):
+    """Exit code 2, one line on stderr naming ``words``, no traceback, nothing on stdout."""
+    assert proc.returncode == 2, proc.stderr
+    assert 'Traceback' not in proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith('pump_friction: error: ')
+    for word in words:
+        assert word in lines[0], lines[0]
+    return lines[0]
+
+
+def alias_bomb(depth=9, width=9):
+    """YAML "billion laughs": 10 lines that expand to width**depth strings."""
+    lines = ['lol0: &a0 [' + ', '.join(['"lol"'] * width) + ']']
+    lines += [f'lol{i}: &a{i} [' + ', '.join([f'*a{i - 1}'] * width) + ']'
+              for i in range(1, depth + 1)]
+    return '\n'.join(lines) + '\n'
+
+
+# -- hangs ---------------------------------------------------------------------------------
+
+
+def test_billion_laughs_pump_file_fails_fast_with_one_line(env, tmp_path):
+    text = PAPER_PUMP.read_text().replace('n_pistons: 5 ', 'n_pistons: *a9 ')
+    pump = tmp_path / 'bomb.yaml'
+    pump.write_text(alias_bomb() + text)
+    proc = cli(env, 'torque', '--speed-rpm', 1000, '--pressure-bar', 100, '--pump', pump,
+               timeout=30)
+    line = refused(proc, 'geometry.n_pistons', 'expected an integer')
+    assert len(line) < 300
+
+
+def test_billion_laughs_params_file_fails_fast_with_one_line(env, tmp_path):
+    params = tmp_path / 'params.yaml'
+    params.write_text(alias_bomb() + '/**/torque_estimator:\n  ros__parameters:\n'
+                      '    hardware_id: *a9\n')
+    proc = cli(env, 'replay', REPO / 'bags' / 'eha_nominal', '--params', params, timeout=30)
+    line = refused(proc, 'hardware_id', 'expected a string')
+    assert len(line) < 300
+
+
+# -- bags written here, message by message -------------------------------------------------
+
+T0 = 1_700_000_000 * 1_000_000_000
+JOINT = 'sensor_msgs/msg/JointState'
+PRESSURE = 'sensor_msgs/msg/FluidPressure'
+
+
+def write_bag(path, n=2000, joint=None, pressure=None, extra=(), storage='sqlite3'):
+    """
+    Write a bag of ``n`` joint states at 1 kHz and pressure at 500 Hz, log time = stamp.
+
+    ``joint(k, fields)`` may change the fields of joint state k (``name``, ``velocity``,
+    ``effort``, ``stamp_ns``) or return raw bytes to write instead; ``pressure(k, fields)``
+    likewise (``fluid_pressure``, ``stamp_ns``); returning None drops the message.
+    ``extra`` lists (topic, msgtype, count) of std_msgs/Float64 topics to add.
+    """
+    import numpy as np
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_typestore, Stores
+
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    t = ts.types
+
+    def header(ns):
+        return t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
+            sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id='')
+
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with Writer(path, version=9, storage_plugin=plugin) as writer:
+        jc = writer.add_connection('/joint_states', JOINT, typestore=ts)
+        pc = writer.add_connection('/load_pressure', PRESSURE, typestore=ts)
+        for k in range(n):
+            log = T0 + k * 1_000_000
+            if k % 2 == 0:
+                fields = {'fluid_pressure': 150e5, 'stamp_ns': log}
+                if pressure is not None:
+                    fields = pressure(k, fields)
+                if isinstance(fields, bytes):
+                    writer.write(pc, log, fields)
+                elif fields is not None:
+                    msg = t[PRESSURE](header=header(fields['stamp_ns']),
+                                      fluid_pressure=fields['fluid_pressure'], variance=0.0)
+                    writer.write(pc, log, ts.serialize_cdr(msg, PRESSURE))
+            fields = {'name': ['pump_shaft'], 'velocity': [400.0 + 0.01 * k],
+                      'effort': [8.0], 'stamp_ns': log}
+            if joint is not None:
+                fields = joint(k, fields)
+            if isinstance(fields, bytes):
+                writer.write(jc, log, fields)
+            elif fields is not None:
+                msg = t[JOINT](header=header(fields['stamp_ns']), name=fields['name'],
+                               position=np.zeros(0), velocity=np.array(fields['velocity']),
+                               effort=np.array(fields['effort']))
+                writer.write(jc, log, ts.serialize_cdr(msg, JOINT))
+        for topic, msgtype, count in extra:
+            conn = writer.add_connection(topic, msgtype, typestore=ts)
+            for k in range(count):
+                writer.write(conn, T0 + k * 1_000_000,
+                             ts.serialize_cdr(t[msgtype](data=float(k)), msgtype))
+    return path
+
+
+def joint_cdr(fields):
+    """Serialise a JointState of ``fields`` (as `write_bag` passes them)."""
+    import numpy as np
+    from rosbags.typesys import get_typestore, Stores
+
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    t = ts.types
+    ns = fields['stamp_ns']
+    msg = t[JOINT](header=t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
+        sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id=''),
+        name=fields['name'], position=np.zeros(0), velocity=np.array(fields['velocity']),
+        effort=np.array(fields['effort']))
+    return bytes(ts.serialize_cdr(msg, JOINT))
+
+
+def summary_counts(stdout):
+    """Return the replay summary's 'skipped:' counters as a dict."""
+    line = next(x for x in stdout.splitlines() if x.strip().startswith('skipped:'))
+    items = line.split(':', 1)[1].split(',')
+    return {k: int(v) for k, v in (item.split() for item in items)}
+
+
+def estimates_of(stdout):
+    line = next(x for x in stdout.splitlines() if x.strip().startswith('estimates:'))
+    return int(line.split()[1])
+
+
+def test_corrupted_name_count_is_skipped_counted_and_reported(env, tmp_path):
+    def corrupt(k, fields):
+        if k != 700:
+            return fields
+        raw = joint_cdr(fields)
+        at = raw.index(b'\x01\x00\x00\x00\x0b\x00\x00\x00pump_shaft')  # name count 1
+        return raw[:at] + (0x0FFFFFFF).to_bytes(4, 'little') + raw[at + 4:]
+
+    bag = write_bag(tmp_path / 'bag', joint=corrupt)
+    proc = cli(env, 'replay', bag, '--quiet', timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ''
+    counts = summary_counts(proc.stdout)
+    assert counts['rejected_undecodable'] == 1
+    assert estimates_of(proc.stdout) == 1999
+
+
+@pytest.mark.parametrize(('change', 'counter'), [
+    (lambda f: f.update(name=['motor']), 'rejected_missing_joint'),
+    (lambda f: f.update(velocity=[], effort=[]), 'rejected_malformed'),
+    (lambda f: f.update(name=['pump_shaft', 'other']), 'rejected_malformed'),
+    (lambda f: f.update(effort=[1.0, 2.0]), 'rejected_malformed'),
+])
+def test_a_bag_of_only_defective_joint_states_says_no_estimate_and_why(env, tmp_path, change,
+                                                                       counter):
+    def defect(k, fields):
+        change(fields)
+        return fields
+
+    bag = write_bag(tmp_path / 'bag', joint=defect)
+    out = tmp_path / 'out'
+    proc = cli(env, 'replay', bag, '--out', out, '--csv', tmp_path / 'e.csv', '--quiet')
+    refused(proc, 'no estimate', f'{counter} 2000')
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['bag']  # nothing written
+
+
+def test_defective_joint_states_among_good_ones_are_counted_like_the_node(env, tmp_path):
+    kinds = {0: lambda f: f.update(name=['motor']),
+             1: lambda f: f.update(velocity=[], effort=[]),
+             2: lambda f: f.update(name=['pump_shaft', 'other']),
+             3: lambda f: f.update(effort=[float('nan')])}
+
+    def some(k, fields):
+        if k % 10 == 5:
+            kinds[(k // 10) % 4](fields)
+        return fields
+
+    proc = cli(env, 'replay', write_bag(tmp_path / 'bag', joint=some), '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    counts = summary_counts(proc.stdout)
+    assert counts['rejected_missing_joint'] == counts['rejected_non_finite'] == 50
+    assert counts['rejected_malformed'] == 100
+    assert estimates_of(proc.stdout) == 2000 - 150  # a NaN effort still has its speed
+
+
+def test_input_topics_without_messages_are_refused_even_if_another_topic_has_some(env,
+                                                                                  tmp_path):
+    bag = write_bag(tmp_path / 'bag', n=0, extra=[('/chatter', 'std_msgs/msg/Float64', 300)])
+    refused(cli(env, 'replay', bag, '--out', tmp_path / 'out'), 'hold no messages')
+    assert not (tmp_path / 'out').exists()
+
+
+def test_metadata_claiming_no_messages_does_not_hide_the_storages(env, tmp_path):
+    import yaml
+
+    bag = write_bag(tmp_path / 'bag', n=3000)
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())
+    info = meta['rosbag2_bagfile_information']
+    info['message_count'] = 0
+    for topic in info['topics_with_message_count']:
+        topic['message_count'] = 0
+    (bag / 'metadata.yaml').write_text(yaml.safe_dump(meta))
+    proc = cli(env, 'replay', bag, '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    assert estimates_of(proc.stdout) == 3000
+    assert '/joint_states 3000, /load_pressure 1500' in proc.stdout
+
+
+# -- outputs that cannot be made: one line naming the target, nothing half-written ---------
+
+BENCH = REPO / 'config' / 'examples' / 'bench_example.csv'
+
+
+def listing(folder):
+    """Every path under ``folder``, relative, hidden ones included."""
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob('*'))
+
+
+@pytest.mark.parametrize('flag', ['--out', '--csv', '--plots'])
+def test_replay_output_below_a_regular_file_is_refused(env, tmp_path, flag):
+    (tmp_path / 'file').write_text('a regular file\n')
+    bag = write_bag(tmp_path / 'bag', n=50)
+    before = listing(tmp_path)
+    line = refused(cli(env, 'replay', bag, flag, tmp_path / 'file' / 'x'),
+                   'cannot create the output', 'is not a folder')
+    assert 'partial' not in line
+    assert listing(tmp_path) == before
+
+
+def test_replay_output_where_nothing_can_be_written_names_no_temporary_file(env, tmp_path):
+    bag = write_bag(tmp_path / 'bag', n=50)
+    line = refused(cli(env, 'replay', bag, '--out', '/proc/bag'), '/proc/bag')
+    assert 'partial' not in line and 'Error' not in line
+
+
+def test_calibrate_out_below_a_regular_file_is_refused(env, tmp_path):
+    (tmp_path / 'file').write_text('x\n')
+    refused(cli(env, 'calibrate', BENCH, '--pump', PAPER_PUMP, '--out',
+                tmp_path / 'file' / 'pump.yaml'), 'is not a folder')
+    assert listing(tmp_path) == ['file']
+
+
+def test_calibrate_report_below_a_file_leaves_no_pump_file_behind(env, tmp_path):
+    (tmp_path / 'file').write_text('x\n')
+    refused(cli(env, 'calibrate', BENCH, '--pump', PAPER_PUMP, '--out', tmp_path / 'pump.yaml',
+                '--report', tmp_path / 'file' / 'report'), 'report', 'is not a folder')
+    assert listing(tmp_path) == ['file']  # no pump.yaml, no staging folder
+
+
+def test_build_table_out_below_a_file_and_over_a_file(env, tmp_path):
+    (tmp_path / 'file').write_text('x\n')
+    refused(cli(env, 'build-table', '--quiet', '--out', tmp_path / 'file' / 't.npz'),
+            'is not a folder')
+    table = tmp_path / 'table.npz'
+    table.write_text('an earlier file\n')
+    refused(cli(env, 'build-table', '--quiet', '--out', table), 'output exists', '--force')
+    assert table.read_text() == 'an earlier file\n'
+    proc = cli(env, 'build-table', '--quiet', '--out', table, '--force',
+               '--max-speed-rpm', 2000)
+    assert proc.returncode == 0, proc.stderr
+    assert table.read_bytes()[:2] == b'PK' and listing(tmp_path) == ['file', 'table.npz']
+
+
+def test_force_never_replaces_an_output_of_another_kind(env, tmp_path):
+    folder = tmp_path / 'important'
+    folder.mkdir()
+    (folder / 'notes.txt').write_text('keep me\n')
+    bag = write_bag(tmp_path / 'bag', n=50)
+    refused(cli(env, 'replay', bag, '--csv', folder, '--force'), 'is a folder')
+    refused(cli(env, 'replay', bag, '--out', folder, '--force'), 'does not look like')
+    assert (folder / 'notes.txt').read_text() == 'keep me\n'
+
+
+# -- fleets: unique output names, folders not files, paths that survive a Dask worker -------
+
+
+@pytest.fixture(scope='module')
+def small_bag(tmp_path_factory):
+    return write_bag(tmp_path_factory.mktemp('small') / 'bag', n=1000)
+
+
+def test_fleet_bags_with_the_same_name_get_distinct_outputs(env, tmp_path, small_bag):
+    import shutil
+    for site in ('site_a', 'site_b'):
+        shutil.copytree(small_bag, tmp_path / 'fleet' / site / 'run1')
+    proc = cli(env, 'replay', tmp_path / 'fleet', '--csv', tmp_path / 'csv', '--out',
+               tmp_path / 'out', '--workers', 2, '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    assert listing(tmp_path / 'csv') == ['site_a', 'site_a/run1.csv', 'site_b',
+                                         'site_b/run1.csv']
+    assert (tmp_path / 'out' / 'site_a' / 'run1' / 'metadata.yaml').exists()
+    assert (tmp_path / 'out' / 'site_b' / 'run1' / 'metadata.yaml').exists()
+    table = proc.stdout.split('\n\n')[-1]
+    assert 'site_a/run1 ' in table and 'site_b/run1 ' in table
+
+
+@pytest.mark.parametrize(('flags', 'words'), [
+    (['--csv', 'res/m3.csv'], ['--csv res/m3.csv', 'names a folder']),
+    (['--out', 'res/x', '--plots', 'res/x'], ['--out and --plots name the same output']),
+    (['--out', 'a'], ['an output cannot be at, in or around the input bag']),
+])
+def test_fleet_output_mistakes_are_refused_before_anything_runs(env, tmp_path, small_bag,
+                                                                flags, words):
+    import shutil
+    shutil.copytree(small_bag, tmp_path / 'a')
+    shutil.copytree(small_bag, tmp_path / 'b')
+    before = listing(tmp_path)
+    refused(cli(env, 'replay', 'a', 'b', *flags, cwd=tmp_path), *words)
+    assert listing(tmp_path) == before
+
+
+def test_the_same_bag_twice_is_refused(env, small_bag):
+    refused(cli(env, 'replay', small_bag, small_bag.parent), 'bag given twice')
+
+
+def test_dask_workers_in_another_directory_find_relative_paths(env, tmp_path, small_bag,
+                                                               monkeypatch):
+    import shutil
+    distributed = pytest.importorskip('dask.distributed', reason='dask[distributed] missing')
+    work = tmp_path / 'work'
+    for name in ('eha_a', 'eha_b'):
+        shutil.copytree(small_bag, work / 'bags' / name)
+    elsewhere = tmp_path / 'elsewhere'
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)  # the workers start here, not where the bags are
+    monkeypatch.setenv('XDG_CACHE_HOME', env['XDG_CACHE_HOME'])
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        proc = cli(env, 'replay', 'bags/eha_a', 'bags/eha_b', '--csv', 'out/csv', '--dask',
+                   cluster.scheduler_address, cwd=work, timeout=120)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert listing(work / 'out') == ['csv', 'csv/eha_a.csv', 'csv/eha_b.csv']
+    assert not list(elsewhere.iterdir())
+
+
+# -- Ctrl-C: one line, exit code 130, nothing left -----------------------------------------
+
+
+def interrupt(env, argv, watch, group=True, cwd=None):
+    """Start the CLI, wait until it stages an output under ``watch``, then Ctrl-C it."""
+    import signal
+    import time
+
+    def as_in_a_terminal():  # a runner in the background starts us with Ctrl-C ignored
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    proc = subprocess.Popen([sys.executable, '-m', 'pump_friction_ros.cli', *map(str, argv)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env, cwd=cwd, start_new_session=True,
+                            preexec_fn=as_in_a_terminal)
+    try:
+        end = time.monotonic() + 60
+        while not any('.partial' in p.name for p in watch.rglob('*')) if watch.exists() \
+                else True:
+            assert proc.poll() is None, proc.communicate()
+            assert time.monotonic() < end, 'no staged output appeared'
+            time.sleep(0.005)
+        if group:  # a terminal's Ctrl-C reaches the whole foreground process group
+            os.killpg(proc.pid, signal.SIGINT)
+        else:  # kill -INT <pid>: the command itself must stop its helpers
+            proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    return proc.returncode, out, err
+
+
+@pytest.fixture(scope='module')
+def long_bag(tmp_path_factory, env):
+    """Copy a 75 s sample bag to a private folder (the CLI is interrupted replaying it)."""
+    import shutil
+    bag = tmp_path_factory.mktemp('long') / 'eha_wear'
+    shutil.copytree(REPO / 'bags' / 'eha_valve_plate_wear', bag)
+    cli(env, 'build-table', '--quiet')  # warm the cache: the replay starts at once
+    return bag
+
+
+def test_ctrl_c_during_a_replay_leaves_nothing(env, tmp_path, long_bag):
+    res = tmp_path / 'res'
+    code, out, err = interrupt(env, ['replay', long_bag, '--out', res / 'bag', '--csv',
+                                     res / 'e.csv', '--plots', res / 'plots'], tmp_path)
+    assert (code, err) == (130, 'pump_friction: interrupted\n')
+    assert 'Traceback' not in out
+    assert not res.exists()  # no output, no staging folder, no folder made for them
+
+
+@pytest.mark.parametrize('group', [True, False])
+def test_ctrl_c_during_a_fleet_leaves_nothing(env, tmp_path, long_bag, group):
+    import shutil
+    for name in ('one', 'two', 'three'):
+        shutil.copytree(long_bag, tmp_path / 'fleet' / name)
+    res = tmp_path / 'res'
+    code, _, err = interrupt(env, ['replay', tmp_path / 'fleet', '--workers', 2, '--out',
+                                   res / 'bags', '--csv', res / 'csv'], res, group=group)
+    assert (code, err) == (130, 'pump_friction: interrupted\n')
+    assert not res.exists(), listing(res)
+
+
+# -- pump files: any valid piston count works, physical ranges are enforced -----------------
+
+
+def pump_file(path, **geometry_or_values):
+    """Write the paper's pump file with some values changed (``section__key=value``)."""
+    import yaml
+    raw = yaml.safe_load(PAPER_PUMP.read_text())
+    for name, value in geometry_or_values.items():
+        section, key = name.split('__')
+        raw[section][key] = value
+    path.write_text(yaml.safe_dump(raw))
+    return path
+
+
+def same_displacement(n):
+    """Geometry of the paper pump redrawn with n pistons of its displacement (test_model)."""
+    import math
+    return {'geometry__n_pistons': n, 'geometry__bore_diameter_m': 9.5e-3 * math.sqrt(5 / n),
+            'geometry__bore_pitch_radius_m': 11.5e-3}
+
+
+@pytest.mark.parametrize('n', [7, 9])
+def test_pumps_with_seven_or_nine_pistons_work_model_and_table(env, tmp_path, n):
+    import json
+    pump = pump_file(tmp_path / f'p{n}.yaml', **same_displacement(n))
+    proc = cli(env, 'torque', '--speed-rpm', 4000, '--pressure-bar', 136, '--pump', pump,
+               '--json')
+    assert proc.returncode == 0, proc.stderr
+    model = json.loads(proc.stdout)
+    assert all(v is not None for v in model.values())
+    assert model['theoretical_nm'] == pytest.approx(4.8979354e-6 * 136e5 / (2 * 3.141592653589793))
+    table = tmp_path / 't.npz'
+    assert cli(env, 'build-table', '--pump', pump, '--out', table, '--quiet').returncode == 0
+    proc = cli(env, 'torque', '--speed-rpm', 4000, '--pressure-bar', 136, '--pump', pump,
+               '--json', '--table', table)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)['friction_nm'] == pytest.approx(model['friction_nm'],
+                                                                   rel=5e-3)
+
+
+@pytest.mark.parametrize(('values', 'words'), [
+    ({'geometry__n_pistons': 10**9}, ['geometry.n_pistons', 'do not fit']),
+    ({'geometry__n_pistons': 7}, ['7 bores of 0.0095 m do not fit']),  # the paper's bores
+    ({'geometry__n_pistons': 7, 'geometry__bore_diameter_m': 6e-3},
+     ['barrel would lift off']),  # small bores under the paper's (balanced) valve plate
+    ({'valve_plate__film_clearance_m': 1e-320}, ['film_clearance_m', 'must be >= 1e-07']),
+    ({'oil__viscosity_m2_s': 70.0}, ['oil.viscosity_m2_s', 'must be <= 0.01']),  # cSt, not SI
+])
+def test_unphysical_pump_values_are_refused(env, tmp_path, values, words):
+    pump = pump_file(tmp_path / 'p.yaml', **values)
+    refused(cli(env, 'torque', '--speed-rpm', 4000, '--pressure-bar', 136, '--pump', pump),
+            *words)
+
+
+# -- mistakes a new user makes with params files ----------------------------------------------
+
+
+def test_a_partial_params_file_changes_only_what_it_names(env, tmp_path):
+    one = tmp_path / 'one.yaml'
+    one.write_text('/**/torque_estimator:\n  ros__parameters:\n    hardware_id: pump_7\n')
+    bag = REPO / 'bags' / 'eha_nominal'
+    alone = cli(env, 'replay', bag, '--params', one, '--quiet')
+    default = cli(env, 'replay', bag, '--quiet')
+    assert alone.returncode == default.returncode == 0
+    # hardware_id changes nothing else: the same model as without a params file
+
+    def strip(text):
+        return [line for line in text.splitlines()
+                if 'replayed in' not in line and 'node parameters from' not in line]
+
+    assert strip(alone.stdout) == strip(default.stdout)
+    assert '  WARN: none' in alone.stdout  # the bag's own parameters (node_params.yaml) hold
+    # with the sample bags' own parameters first, the healthy bag stays healthy
+    both = cli(env, 'replay', bag, '--params', REPO / 'bags' / 'eha_params.yaml', '--params',
+               one, '--quiet')
+    assert both.returncode == 0, both.stderr
+    assert '  WARN: none' in both.stdout and '  ERROR: none' in both.stdout
+
+
+def test_a_relative_pump_file_from_another_directory_is_explained(env, tmp_path):
+    out = tmp_path / 'repo' / 'out'
+    out.mkdir(parents=True)
+    (out / 'my_pump.yaml').write_text(PAPER_PUMP.read_text())
+    params = out / 'my_params.yaml'
+    params.write_text('/**/torque_estimator:\n  ros__parameters:\n    pump_file: '
+                      'out/my_pump.yaml\n')
+    elsewhere = tmp_path / 'elsewhere'
+    elsewhere.mkdir()
+    line = refused(cli(env, 'replay', REPO / 'bags' / 'eha_nominal', '--params', params,
+                       cwd=elsewhere), 'pump_file', str(params), str(elsewhere),
+                   'current directory')
+    assert 'package://' in line
+    ok = cli(env, 'replay', REPO / 'bags' / 'eha_nominal', '--params',
+             REPO / 'bags' / 'eha_params.yaml', '--params', params, '--quiet',
+             cwd=tmp_path / 'repo')
+    assert ok.returncode == 0, ok.stderr
+
+
+def test_replay_counts_exactly_what_the_nodes_conversion_counts(tmp_path, env, monkeypatch):
+    """Batch decoder + replay vs rosbags messages through the node's own conversion."""
+    from pump_friction_ros.bags.replay import replay_bag
+    from pump_friction_ros.config import EstimatorConfig
+    from pump_friction_ros.estimator import estimator_from_config
+    from pump_friction_ros.inputs import INPUTS
+    from pump_friction_ros.ros_messages import input_sample, stamp_to_ns
+    from rosbags.highlevel import AnyReader
+
+    monkeypatch.setenv('XDG_CACHE_HOME', env['XDG_CACHE_HOME'])
+    kinds = {0: lambda f: f.update(name=['motor']),
+             1: lambda f: f.update(velocity=[], effort=[]),
+             2: lambda f: f.update(effort=[1.0, 2.0]),
+             3: lambda f: f.update(effort=[float('nan')]),
+             4: lambda f: f.update(velocity=[float('inf')]),
+             5: lambda f: f.update(stamp_ns=f['stamp_ns'] + 10 * 365 * 86400 * 10**9)}
+
+    def some(k, fields):
+        if k % 7 == 3:
+            kinds[(k // 7) % 6](fields)
+        return fields
+
+    def pressure(k, fields):
+        if k % 50 == 10:
+            fields['fluid_pressure'] = float('nan')
+        return fields
+
+    bag = write_bag(tmp_path / 'bag', joint=some, pressure=pressure)
+    config = EstimatorConfig()
+    summary = replay_bag(bag, config, keep_estimates=True)
+    node = estimator_from_config(config)
+    by_topic = {'/' + spec.topic: spec for spec in INPUTS}
+    made = []
+    with AnyReader([bag]) as reader:
+        for conn, log_ns, raw in reader.messages():
+            spec = by_topic[conn.topic]
+            msg = reader.deserialize(raw, conn.msgtype)  # what rclpy hands the node
+            value, torque, defect = input_sample(spec, msg, config.joint_name)
+            if defect:
+                node.on_defect(defect)
+                continue
+            stamp = stamp_to_ns(msg.header.stamp) or log_ns
+            est = node.on_input(spec.kind, stamp, value, torque, log_ns)
+            if est is not None:
+                made.append(est)
+    assert summary.counts == node.counts
+    assert all(v > 0 for k, v in node.counts.items() if k in (
+        'rejected_missing_joint', 'rejected_malformed', 'rejected_non_finite',
+        'rejected_future_stamp'))
+    assert [e.expected_nm for e in summary.estimates_list] == [e.expected_nm for e in made]

@@ -1,0 +1,325 @@
+"""Evaluation bank of the wear monitor: simulator truth, metrics, adapter, the quick bank."""
+
+import ast
+import csv
+from dataclasses import replace
+import math
+from pathlib import Path
+
+import numpy as np
+from pump_friction_ros.cli import main
+from pump_friction_ros.estimator import TorqueEstimator
+from pump_friction_ros.evaluation.bank import (
+    base_config,
+    build_scenarios,
+    read_monitor,
+    run_bank,
+    RunRecord,
+)
+from pump_friction_ros.evaluation.report import (
+    bank_figures,
+    format_table,
+    nearest_rank,
+    write_outputs,
+)
+from pump_friction_ros.evaluation.scenarios import (
+    Scenario,
+    simulate_scenario,
+    warm_up_temperature,
+)
+from pump_friction_ros.evaluation.settings import (
+    BankSettings,
+    FAMILIES,
+    Fault,
+    FAULTS,
+    QUICK,
+)
+from pump_friction_ros.model import COMPONENTS
+from pump_friction_ros.monitor import OK
+from pump_friction_ros.oil import WaltherViscosity
+from pump_friction_ros.params import load_pump
+from pump_friction_ros.table_io import cached_table
+import pytest
+
+FAMILY = {f.name: f for f in FAMILIES}
+FAULT = {f.name: f for f in FAULTS}
+CONFIG = base_config()
+PACKAGE = Path(__file__).resolve().parents[1] / 'pump_friction_ros' / 'evaluation'
+
+
+@pytest.fixture(scope='module')
+def table():
+    return cached_table(load_pump(None))
+
+
+def scenario(family, fault='nominal', duration_s=30.0, onset_s=15.0, quiet=True, **motion):
+    fam = FAMILY[family]
+    if motion:
+        fam = replace(fam, motion=replace(fam.motion, **motion))
+    if quiet:
+        fam = replace(fam, signals=replace(fam.signals, torque_noise_nm=0.0,
+                                           speed_noise_rad_s=0.0, pressure_noise_pa=0.0,
+                                           temperature_noise_c=0.0))
+    fault = FAULT[fault] if isinstance(fault, str) else fault
+    return Scenario(fam, fault, 0, duration_s, onset_s, 10.0, 0, CONFIG)
+
+
+# -- the simulator's truth, pinned independently ---------------------------------------------
+
+def test_truth_torque_on_a_steady_cruise_is_the_full_models_with_the_faults(table, paper_model):
+    fault = Fault('compound', 'other_friction', valve_plate=1.3, bearing=1.8,
+                  spherical_joints=3.0, drive_loss_nm=0.2, torque_offset_nm=0.1)
+    sim = simulate_scenario(scenario('cruise', fault, variation=(0.0, 0.0)), table)
+    idx = np.r_[np.linspace(4000, 14000, 8).astype(int), np.linspace(16000, 29000, 8).astype(int)]
+    t, speed, dp = sim.t_s[idx], sim.true_speed_rad_s[idx], sim.true_pressure_diff_pa[idx]
+    assert np.all(sim.true_accel_rad_s2[idx] == 0.0)  # steady: no inertia term
+    res = paper_model.evaluate(speed, dp, CONFIG.oil_viscosity_m2_s or None)  # 0: the pump's
+    after = t >= 15.0
+    factors = {'valve_plate': 1.3, 'bearing': 1.8, 'spherical_joints': 3.0, 'piston_heads': 1.0}
+    friction = sum(np.where(after, factors[c], 1.0) * res.component_nm(c) for c in COMPONENTS)
+    direction = np.tanh(speed / 2.0)  # the pump file's zero-speed threshold
+    loss = CONFIG.drive_loss_torque_nm + 0.2 * after  # the nominal loss, then the fault's
+    expected = res.theoretical_nm + friction + loss * direction + 0.1 * after
+    tolerance = np.maximum(0.005 * np.abs(friction), 1e-3)  # the table's accuracy
+    assert np.all(np.abs(sim.torque_nm[idx] - expected) <= tolerance)
+    np.testing.assert_allclose(res.theoretical_nm, 4.898e-6 * dp / (2 * math.pi), rtol=1e-3)
+    assert sim.vp_truth == 1.3 and not sim.other_truth_exact
+    assert 1.0 < sim.other_truth < 3.0
+
+
+def test_pressure_gain_fault_scales_the_measured_pressure_by_exactly_1_05(table):
+    sim = simulate_scenario(scenario('trapezoid', 'pressure_gain_1.05'), table)
+    true_dp = np.interp(sim.pressure_t_s, sim.t_s, sim.true_pressure_diff_pa)
+    after = sim.pressure_t_s >= 15.0
+    np.testing.assert_allclose(sim.pressure_diff_pa[after] / true_dp[after], 1.05, rtol=1e-13)
+    np.testing.assert_allclose(sim.pressure_diff_pa[~after], true_dp[~after], rtol=1e-13)
+    assert sim.pressure_t_s.size == 30 * 500 and sim.t_s.size == 30 * 1000
+
+
+def test_warm_up_spans_30_to_60_degc_and_viscosity_follows_walther(table):
+    duration = 40.0
+    scen = scenario('warm_up', duration_s=duration)
+    sim = simulate_scenario(scen, table)
+    tau = 0.3 * duration
+    closed = 30.0 + 30.0 * (1 - np.exp(-sim.temperature_t_s / tau)) / (1 - math.exp(-1 / 0.3))
+    np.testing.assert_allclose(sim.true_temperature_c, closed, rtol=1e-12)
+    np.testing.assert_allclose(warm_up_temperature(scen.family.motion, np.array([0.0, duration]),
+                                                   duration), [30.0, 60.0], rtol=1e-12)
+    assert sim.temperature_t_s.size == 400  # 10 Hz
+    law = WaltherViscosity(46e-6, 6.8e-6)
+    for k in range(0, sim.t_s.size, 3999):
+        t = sim.t_s[k]
+        temp = 30.0 + 30.0 * (1 - math.exp(-t / tau)) / (1 - math.exp(-1 / 0.3))
+        assert sim.true_viscosity_m2_s[k] == pytest.approx(law(temp), rel=1e-12)
+    assert sim.true_viscosity_m2_s[0] == pytest.approx(75.4e-6, rel=0.01)  # VG 46 at 30 degC
+    assert scen.estimator_config().viscosity_source == 'temperature'
+    assert scenario('trapezoid').estimator_config().viscosity_source == 'parameter'
+
+
+def test_sine_family_speed_is_its_closed_form(table):
+    sim = simulate_scenario(scenario('sine', duration_s=20.0), table)
+    m, s = sim.motion, FAMILY['sine'].motion
+    assert s.amplitude_1_rad_s[0] <= m['amplitude_1_rad_s'] <= s.amplitude_1_rad_s[1]
+    assert s.period_2_s[0] <= m['period_2_s'] <= s.period_2_s[1]
+    t = sim.t_s
+    closed = m['amplitude_1_rad_s'] * np.sin(2 * np.pi * t / m['period_1_s']) + \
+        m['amplitude_2_rad_s'] * np.sin(2 * np.pi * t / m['period_2_s'])
+    np.testing.assert_allclose(sim.true_speed_rad_s, closed, rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(sim.speed_rad_s, closed, rtol=1e-12, atol=1e-9)  # no noise
+
+
+@pytest.mark.parametrize('family', [f.name for f in FAMILIES])
+def test_every_family_starts_at_rest_stays_in_the_table_and_is_consistent(table, family):
+    sim = simulate_scenario(scenario(family, duration_s=60.0, quiet=False), table)
+    speed, accel = sim.true_speed_rad_s, sim.true_accel_rad_s2
+    assert abs(speed[0]) < 1e-9
+    assert np.abs(speed).max() < table.speed_axis_rad_s[-1]
+    assert np.abs(sim.pressure_diff_pa).max() < table.pressure_axis_pa[-1]
+    gap = np.abs(np.gradient(speed, sim.t_s) - accel)
+    assert np.quantile(gap, 0.99) <= 0.01 * np.abs(accel).max() + 1.0  # a is d(speed)/dt
+    noise = sim.torque_nm - simulate_scenario(scenario(family, duration_s=60.0), table).torque_nm
+    assert np.std(noise) == pytest.approx(0.05, rel=0.05)
+    above_gate = np.mean(np.abs(accel) > CONFIG.monitor_max_accel_rad_s2)
+    reversals = np.count_nonzero(np.diff(np.sign(speed[np.abs(speed) > 1.0])))
+    if family == 'high_dynamics':
+        assert above_gate > 0.5
+    if family == 'creep':
+        assert reversals >= 20 and np.median(np.abs(speed)) < 45.0
+    if family == 'cruise':
+        assert reversals == 0
+
+
+# -- metrics on hand-made records -------------------------------------------------------------
+
+def record(family='trapezoid', fault='valve_plate_x1.6', truth_class='valve_plate', **kw):
+    base = {'scenario_id': 'x', 'family': family, 'fault': fault, 'truth_class': truth_class,
+            'seed': 0, 'duration_s': 3600.0, 'onset_s': 1800.0,
+            'alarm_entries_before_onset': 0, 'first_alarm_s': math.nan, 'final_level': OK,
+            'attribution': 'none', 'vp_scale': 1.0, 'vp_std': 0.01, 'other_scale': 1.0,
+            'other_std': 0.01, 'vp_truth': 1.6, 'other_truth': 1.0, 'other_truth_exact': True,
+            'monitored_fraction': 0.5, 'above_min_speed_fraction': 0.8}
+    base.update(kw)
+    return RunRecord(**base)
+
+
+def test_nearest_rank_percentiles_by_hand():
+    assert nearest_rank([10, 20, 30, 40, math.inf], 50) == 30  # ceil(2.5) = 3rd
+    assert nearest_rank([10, 20, 30, 40, math.inf], 90) == math.inf  # ceil(4.5) = 5th
+    assert nearest_rank(range(1, 11), 90) == 9 and nearest_rank(range(1, 11), 50) == 5
+    assert math.isnan(nearest_rank([], 50))
+
+
+def test_false_alarm_rates_delays_confusion_and_coverage_by_hand():
+    nominal = {'fault': 'nominal', 'truth_class': 'nominal', 'onset_s': math.inf,
+               'vp_truth': 1.0}
+    records = [
+        record(**nominal, duration_s=1800.0, alarm_entries_before_onset=1),
+        record(**nominal, duration_s=1800.0, vp_scale=1.03, vp_std=0.01),
+        record(**nominal, family='sine', alarm_entries_before_onset=3,
+               attribution='other_friction'),
+        # valve plate x1.6, onset 1800 s: delays 10, 20, 30, 40 s and one run not detected
+        *(record(first_alarm_s=1800.0 + d, attribution=a, vp_scale=v, vp_std=0.03)
+          for d, a, v in ((10, 'valve_plate', 1.55), (20, 'valve_plate', 1.5),
+                          (30, 'other_friction', 1.6), (40, 'valve_plate', 1.7))),
+        record(alarm_entries_before_onset=2, onset_s=900.0, vp_scale=1.0, vp_std=0.5),
+        record(fault='bearing_x1.8', truth_class='other_friction', family='sine',
+               first_alarm_s=1805.0, attribution='valve_plate', vp_truth=1.0, vp_scale=1.2,
+               other_truth=1.3, other_truth_exact=False, other_scale=1.3),
+    ]
+    fig = bank_figures(records)
+    assert fig['runs'] == 9
+    assert fig['nominal_hours'] == {'trapezoid': 1.0, 'sine': 1.0, 'all': 2.0}
+    assert fig['false_alarms_per_hour'] == {'trapezoid': 1.0, 'sine': 3.0, 'all': 2.0}
+    # before onset: 4 x 0.5 h + 0.25 h (trapezoid) and 0.5 h (sine); 2 entries
+    assert fig['pre_onset_hours']['all'] == pytest.approx(2.75)
+    assert fig['pre_onset_false_alarms_per_hour']['trapezoid'] == pytest.approx(2 / 2.25)
+    assert fig['pre_onset_false_alarms_per_hour']['sine'] == 0.0
+    assert fig['delay_p50_s']['valve_plate_x1.6']['trapezoid'] == 30.0
+    assert fig['delay_p90_s']['valve_plate_x1.6']['all'] == math.inf
+    assert fig['not_detected']['valve_plate_x1.6'] == {'trapezoid': 1, 'sine': 0, 'all': 1}
+    assert fig['delay_p90_s']['bearing_x1.8']['sine'] == fig['delay_p90_s']['bearing_x1.8'][
+        'all'] == 5.0
+    assert 'nominal' not in fig['delay_p50_s']
+    assert fig['confusion']['valve_plate_x1.6'] == {
+        'valve_plate': 3, 'other_friction': 1, 'not_friction': 0, 'cannot_tell': 0, 'none': 1}
+    assert fig['confusion']['nominal']['none'] == 2
+    assert fig['confusion_by_class']['other_friction']['valve_plate'] == 1
+    assert fig['vp_attribution_rate'] == pytest.approx(3 / 5)
+    assert fig['attribution_correct_rate']['nominal'] == pytest.approx(2 / 3)
+    assert fig['attribution_correct_rate']['other_friction'] == 0.0
+    # 1.96 x 0.03 = 0.0588: 1.55 and 1.6 covered, 1.5 and 1.7 not; 1.0 +- 0.98 holds 1.6
+    assert fig['coverage_vp']['valve_plate_x1.6'] == pytest.approx(3 / 5)
+    assert fig['coverage_vp']['nominal'] == pytest.approx(2 / 3)  # 1.03 +- 0.0196 misses
+    assert fig['vp_scale_error_median']['valve_plate_x1.6'] == pytest.approx(-0.05)
+    assert fig['coverage_other']['bearing_x1.8'] != fig['coverage_other']['bearing_x1.8']  # n/a
+    assert fig['coverage_other']['all'] == 1.0  # the exact ones: 1.0 +- 0.0196 holds 1.0
+    table = format_table(fig)
+    assert '| valve_plate_x1.6: delay p50/p90 s' in table and '(1 nd)' in table
+
+
+# -- the monitor adapter ----------------------------------------------------------------------
+
+def monitored_core(table, valve_plate, rest, loss):
+    """Return a core whose monitor saw 60 s of a pump with these true terms."""
+    core = TorqueEstimator(CONFIG, table, 46e-6, 'hong_doh_2004')
+    core.on_pressure(0, 100e5)
+    core.on_joint_state(0, 300.0, 10.0)
+    rng = np.random.default_rng(5)
+    for k in range(60000):  # 60 s at 1 kHz; both directions, pump and motor mode
+        sign = 1.0 if (k // 700) % 2 else -1.0
+        vp, other = 1.0 + 0.5 * math.sin(k / 900), 0.8 + 0.3 * math.cos(k / 1300)
+        theoretical = 8.0 * math.sin(k / 2100)
+        friction = valve_plate * vp + rest * other + loss + rng.normal(0.0, 0.05)
+        modelled = vp + other
+        core.monitor.update(k * 1e-3, 1e-3 if k % 700 else 0.0, (friction - modelled) * sign,
+                            friction, vp, 0.7 * other, 0.3 * other, theoretical, sign)
+    return core
+
+
+@pytest.mark.parametrize(('valve_plate', 'rest', 'loss', 'expected', 'words'), [
+    (1.5, 1.0, 0.0, 'valve_plate', ': valve plate'),
+    (1.0, 1.6, 0.0, 'other_friction', 'not the valve plate'),
+    (1.0, 1.0, 0.3, 'not_friction', 'not friction: drive_loss'),
+    (1.0, 1.0, 0.0, 'none', 'as modelled'),
+])
+def test_read_monitor_agrees_with_the_diagnostics_message(table, valve_plate, rest, loss,
+                                                          expected, words):
+    core = monitored_core(table, valve_plate, rest, loss)
+    reading = read_monitor(core)
+    assert reading.attribution == expected
+    assert words in core.diagnostics(0).message
+    assert reading.level == core.monitor.level == (OK if expected == 'none' else 2)
+    assert abs(reading.vp_scale - valve_plate) < 3.0 * reading.vp_std  # the truth, in bounds
+    assert abs(reading.other_scale - rest) < 3.0 * reading.other_std
+    assert reading.vp_std == core.monitor.valve_plate_scale_std < 0.1
+
+
+# -- banks ------------------------------------------------------------------------------------
+
+TINY = BankSettings('tiny', nominal_seeds=1, nominal_duration_s=20.0, fault_seeds=1,
+                    fault_duration_s=20.0, ramp_s=5.0,
+                    families=('trapezoid', 'setpoint_lag', 'warm_up'),
+                    faults=('nominal', 'valve_plate_x2.0', 'pressure_gain_1.05'))
+
+
+def test_scenarios_are_deterministic_per_seed():
+    a, b, c = build_scenarios(QUICK, 0), build_scenarios(QUICK, 0), build_scenarios(QUICK, 1)
+    assert [s.onset_s for s in a] == [s.onset_s for s in b] != [s.onset_s for s in c]
+    assert len(a) == len(FAMILIES) * (QUICK.nominal_seeds + (len(FAULTS) - 1) * QUICK.fault_seeds)
+    onsets = [s.onset_s / s.duration_s for s in a if s.fault.name != 'nominal']
+    assert min(onsets) >= 0.4 and max(onsets) <= 0.6
+
+
+def test_one_and_two_workers_give_identical_records():
+    one, two = run_bank(TINY, workers=1), run_bank(TINY, workers=2)
+    assert len(one.records) == 9
+    assert [repr(r) for r in one.records] == [repr(r) for r in two.records]
+
+
+@pytest.fixture(scope='module')
+def quick():
+    return run_bank(QUICK, workers=2)
+
+
+def test_quick_bank_end_to_end(quick, tmp_path):
+    records = quick.records
+    assert len(records) == 7 * 2 + 7 * 9
+    assert {r.family for r in records} == set(FAMILY)
+    fig = bank_figures(records)
+    assert fig['nominal_hours']['all'] == pytest.approx(7 * 2 * 150 / 3600)
+    assert set(fig['delay_p90_s']) == set(FAULT) - {'nominal'}
+    for r in records:
+        assert r.attribution in ('valve_plate', 'other_friction', 'not_friction',
+                                 'cannot_tell', 'none')
+        assert 0.0 <= r.monitored_fraction <= 1.0 and 0.0 <= r.above_min_speed_fraction <= 1.0
+    # targets of the issue that the quick bank can show (the full bank: README)
+    assert fig['false_alarms']['all'] == 0
+    assert fig['delay_p90_s']['valve_plate_x1.6']['trapezoid'] < 20.0
+    for fault in ('bearing_x1.8', 'joints_x3', 'drive_loss_+0.2nm', 'torque_offset_+0.2nm',
+                  'pressure_gain_1.05'):  # never blamed on the valve plate
+        assert all(r.attribution != 'valve_plate' for r in records if r.fault == fault)
+    table = format_table(fig, quick)
+    assert len(table.splitlines()) == 2 + 2 + len(FAULTS) + 3  # head, rows, legend, footer
+    for name in [f.label for f in FAMILIES] + [f.name for f in FAULTS]:
+        assert name in table
+    paths = write_outputs(quick, fig, table, tmp_path)
+    assert all(p.stat().st_size > 0 for p in paths)
+    with (tmp_path / 'records.csv').open() as handle:
+        assert len(list(csv.DictReader(handle))) == len(records)
+
+
+def test_command_line_hook(capsys):
+    assert main(['evaluate-monitor', '--workers', '0']) == 2
+    assert '--workers' in capsys.readouterr().err
+
+
+def test_the_bank_imports_no_ros():
+    ros = {'rclpy', 'rcl_interfaces', 'std_msgs', 'sensor_msgs', 'diagnostic_msgs'}
+    for path in PACKAGE.glob('*.py'):
+        tree = ast.parse(path.read_text())
+        names = {alias.name.split('.')[0] for node in ast.walk(tree)
+                 if isinstance(node, ast.Import) for alias in node.names}
+        names |= {node.module.split('.')[0] for node in ast.walk(tree)
+                  if isinstance(node, ast.ImportFrom) and node.module and not node.level}
+        assert not names & ros, path.name
+        assert len(path.read_text().splitlines()) < 500, path.name
