@@ -49,7 +49,15 @@ TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
 _VP, _OTHER, _LOSS, _OFFSET, _GAIN = range(5)
 _N = len(TERMS)
 _NOT_FRICTION = (_LOSS, _OFFSET, _GAIN)
-_MAX_PREDICT_S = 600.0  # a longer pause adds no more uncertainty than ten minutes
+_MAX_PREDICT_S = 600.0
+"""A pause longer than this [s] adds no more random-walk uncertainty than this one does
+(the variances are capped at their priors anyway)."""
+MIN_WINDOW_SAMPLES = 10
+"""A window with fewer monitored samples (a short burst between reversals) is not a
+measurement: its mean would carry more of the reversal than of the steady friction."""
+WHITE_NOISE_GAIN = 0.001
+"""Weight of each new successive difference in the running white-noise variance: a memory
+of ~1,000 samples (1 s at 1 kHz), long against the noise, short against oil warm-up."""
 
 
 class Verdict:
@@ -136,7 +144,7 @@ class FrictionAttribution:
         if d == d:  # successive difference within a run: 2 sigma^2 on average
             half = 0.5 * d * d
             wv = self._white_var
-            self._white_var = half if wv != wv else wv + 0.001 * (half - wv)
+            self._white_var = half if wv != wv else wv + WHITE_NOISE_GAIN * (half - wv)
         self._n += 1
         self._time += dt_s
         self._sy += friction_nm
@@ -150,7 +158,7 @@ class FrictionAttribution:
     def _close(self, t_s: float) -> None:
         """Update the filter with the open window's mean, if it holds enough samples."""
         n = self._n
-        if n < 10 or self._white_var != self._white_var:
+        if n < MIN_WINDOW_SAMPLES or self._white_var != self._white_var:
             return
         inv = 1.0 / n
         h = np.array([self._svp * inv, self._so * inv, 1.0, self._sign, -self._sth * inv])

@@ -122,8 +122,8 @@ def cached_table(params: PumpParams, progress: Callable[[float], None] | None = 
     """
     Return the default table for ``params``: from the cache, or built and cached.
 
-    The file name holds the pump name, its parameter hash and the model version, so a
-    changed pump file or model never meets a stale table.
+    The cache file is `cached_table_path`'s, so a changed pump file or model never meets a
+    stale table.
 
     Parameters
     ----------
