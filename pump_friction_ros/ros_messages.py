@@ -25,7 +25,6 @@ __all__ = [
     'MessageTypes',
     'diagnostic_array',
     'float64_cdr',
-    'float64_message',
     'input_sample',
     'joint_sample',
     'level_from_msg',
@@ -241,11 +240,6 @@ def stamp_msg(types: MessageTypes, ns: int) -> Any:
     """``builtin_interfaces/Time`` for a time in nanoseconds (>= 0)."""
     sec, nanosec = divmod(int(ns), 1_000_000_000)
     return types.time(sec=sec, nanosec=nanosec)
-
-
-def float64_message(types: MessageTypes, value: float) -> Any:
-    """``std_msgs/Float64`` holding ``value``."""
-    return types.float64(data=float(value))
 
 
 def float64_cdr(value: float) -> bytes:

@@ -151,6 +151,10 @@ def test_sample_bags_decode_one_by_one_as_in_batches(tmp_path, monkeypatch):
                 one = decoder(spec.kind)
                 for i, raw in enumerate(raws):
                     stamp, value, torque, defect = one(raw)
+                    # the independent reference: rosbags' deserialiser + the node's conversion
+                    msg = STORE.deserialize_cdr(raw, spec.msgtype)
+                    assert (value, torque, defect) == input_sample(spec, msg, config.joint_name)
+                    assert stamp == (stamp_to_ns(msg.header.stamp) if spec.has_header else None)
                     assert (stamp, defect) == (int(batch.stamps[i]), batch.defects[i])
                     assert value == (batch.values[i] if batch.has_value[i] else None)
                     assert torque == (batch.torques[i] if batch.has_torque[i] else None)

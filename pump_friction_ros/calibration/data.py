@@ -17,6 +17,7 @@ import numpy as np
 
 from ..config import EstimatorConfig
 from ..errors import CalibrationError, quote
+from ..estimator import TEMPERATURE_RANGE_C
 from ..oil import WaltherViscosity
 from ..table import FrictionTable
 from ..units import BAR_TO_PA, CST_PER_M2_S, RPM_TO_RAD_S
@@ -181,8 +182,10 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
         viscosity = cst / CST_PER_M2_S
     elif extra == ['temperature_c']:
         temp = column['temperature_c']
-        if temp.max() > 250.0 or temp.min() < -60.0:
-            raise CalibrationError(f'{path}: temperature_c outside -60..250 degC (kelvin?)')
+        low, high = TEMPERATURE_RANGE_C  # the estimator's plausible oil temperatures
+        if temp.max() > high or temp.min() < low:
+            raise CalibrationError(f'{path}: temperature_c outside {low:g}..{high:g} degC '
+                                   '(kelvin?)')
         viscosity = np.array([oil(t) for t in temp])
     n = len(rows)
     return Samples(speed=speed_rpm * RPM_TO_RAD_S, dp=bar * BAR_TO_PA, viscosity=viscosity,
