@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import math
+import signal
 import sys
 from typing import Any
 
@@ -20,7 +21,8 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+import rclpy.logging
 from rclpy.node import Node
 from rclpy.qos import (
     DurabilityPolicy,
@@ -35,7 +37,7 @@ from sensor_msgs.msg import FluidPressure, JointState, Temperature
 from std_msgs.msg import Float64, Header
 from std_srvs.srv import Trigger
 
-from .bags.cdr import MessageDecoder
+from .bags.cdr_message import MessageDecoder
 from .config import config_from_mapping, NODE_NAME, PARAMETERS, ParameterSpec
 from .errors import PumpFrictionError
 from .estimate import Estimate
@@ -246,6 +248,44 @@ class TorqueEstimatorNode(Node):
         return response
 
 
+class StopSignals:
+    """
+    SIGINT and SIGTERM noted, never raised: the node stops through rclpy's own handler.
+
+    rclpy's signal handler (installed by ``rclpy.init``) shuts the context down on SIGINT and
+    SIGTERM, which ends the executor's spin with ``ExternalShutdownException``, and then
+    calls the handler that was there before it: this one. Python's default SIGINT handler
+    would raise ``KeyboardInterrupt`` wherever the main thread is; a second Ctrl-C (a
+    terminal sends one to the process group, launch forwards another) would then cut
+    ``destroy_node`` short with a traceback and exit code -2. Here every signal is only
+    recorded, so the clean-up always runs to its end.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.received: list[str] = []
+        self._previous: dict[int, Any] = {}
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        """Note the signal (the Python-level handler)."""
+        self.received.append(signal.Signals(signum).name)
+
+    def __enter__(self) -> StopSignals:
+        """Install this handler for SIGINT and SIGTERM."""
+        for sig in self.SIGNALS:
+            self._previous[sig] = signal.signal(sig, self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Restore the handlers, or ignore both signals if one came (the process stops)."""
+        for sig, handler in self._previous.items():
+            # A stopping process ignores further stop signals, to its very end: CPython
+            # resets Python-level handlers to SIG_DFL at finalisation (SIG_IGN it keeps), and
+            # a signal then, while the middleware tears down, would kill it with -2.
+            signal.signal(sig, signal.SIG_IGN if self.received else handler)
+
+
 def main(args: list[str] | None = None) -> int:
     """
     Run the node (console script ``torque_estimator``).
@@ -258,23 +298,39 @@ def main(args: list[str] | None = None) -> int:
     Returns
     -------
     int
-        0 on a normal shutdown, 1 when the parameters, pump file or table are invalid.
+        0 on a normal shutdown (SIGINT, SIGTERM, or the context shut down elsewhere), 1 when
+        the parameters, pump file or table are invalid.
 
     """
-    rclpy.init(args=args)
-    node = None
-    try:
-        node = TorqueEstimatorNode()
-        rclpy.spin(node)
-    except PumpFrictionError as exc:
-        print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
-        return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
+    with StopSignals() as stop:
+        rclpy.init(args=args)
+        # Made before the node: an executor made after a signal has shut the context down
+        # fails in its constructor (and then in its __del__, with a traceback on stderr).
+        executor = SingleThreadedExecutor()
+        node = None
+        try:
+            if not stop.received:  # else a signal came before rclpy's handler was there
+                node = TorqueEstimatorNode()
+                executor.add_node(node)
+                executor.spin()
+        except PumpFrictionError as exc:
+            print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
+            return 1
+        except ExternalShutdownException:
+            pass
+        except Exception:
+            if not stop.received:  # else the context went away under the start-up
+                raise
+        finally:
+            why = stop.received[0] if stop.received else 'context shut down'
+            logger = node.get_logger().name if node is not None else NODE_NAME
+            executor.shutdown()
+            if node is not None:
+                node.destroy_node()
+            # after destroy_node: the line goes to the console, not to /rosout (whose
+            # publisher died with the context)
+            rclpy.logging.get_logger(logger).info(f'stopping on {why}')
+            rclpy.try_shutdown()
     return 0
 
 

@@ -1,10 +1,23 @@
-"""Shared fixtures: the two shipped pump parameter sets and their models."""
+"""Shared fixtures: the two shipped pump parameter sets and their models; ROS isolation."""
 
+import atexit
+import os
 from pathlib import Path
+import shutil
+import tempfile
 
 from pump_friction_ros.model import PumpModel
 from pump_friction_ros.params import load_pump
 import pytest
+
+# The rclpy tests talk DDS: on this machine only, in a domain of this run's own (two runs at
+# once, or a robot on domain 0, must not hear each other), logs in a temporary folder. Set
+# before any test module imports rclpy; a value already in the environment is kept.
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+os.environ.setdefault('ROS_DOMAIN_ID', str(os.getpid() % 100 + 1))
+if 'ROS_LOG_DIR' not in os.environ:
+    os.environ['ROS_LOG_DIR'] = tempfile.mkdtemp(prefix='pump_friction_ros_log_')
+    atexit.register(shutil.rmtree, os.environ['ROS_LOG_DIR'], ignore_errors=True)
 
 REPO = Path(__file__).resolve().parents[1]
 PAPER_PUMP = REPO / 'config' / 'pumps' / 'hong_doh_2004.yaml'

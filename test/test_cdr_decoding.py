@@ -11,7 +11,8 @@ try:
 except ImportError:  # a ROS shell without pip's rosbags: skip, do not break collection
     pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
-from pump_friction_ros.bags.cdr import MessageDecoder, TopicDecoder  # noqa: I100 (after try)
+from pump_friction_ros.bags.cdr import TopicDecoder  # noqa: I100 (after try)
+from pump_friction_ros.bags.cdr_message import MessageDecoder
 from pump_friction_ros.config import EstimatorConfig
 from pump_friction_ros.inputs import Defect, InputKind, INPUTS
 from pump_friction_ros.ros_messages import float64_cdr, input_sample, stamp_to_ns
@@ -74,6 +75,30 @@ def test_joint_states_decode_as_the_node_converted_them():
         raw = raw_of(msg, 'sensor_msgs/msg/JointState')
         assert decode(raw) == reference(SPEC[InputKind.JOINT_STATE], raw), msg.name
     assert decode.fallbacks == 0  # every one of them by the parser
+
+
+def test_parser_and_deserialiser_give_the_same_sample_defects_included():
+    """Big-endian CDR goes through the deserialiser: it must answer as the parser does."""
+    parser, fallback = decoder(InputKind.JOINT_STATE), decoder(InputKind.JOINT_STATE)
+    for msg in JOINT_STATES:
+        little = raw_of(msg, 'sensor_msgs/msg/JointState')
+        big = raw_of(msg, 'sensor_msgs/msg/JointState', little_endian=False)
+        assert parser(little) == fallback(big), msg.name
+    assert (parser.fallbacks, fallback.fallbacks) == (0, len(JOINT_STATES))
+
+
+def test_rmw_padding_is_read_by_the_parser_one_by_one():
+    """Fast DDS's serialize_message: 12 bytes, not all zero, after empty double arrays."""
+    decode = decoder(InputKind.JOINT_STATE)
+    for msg in (joint_state(['wheel', JOINT], [1.0, -523.5], [], position=[]),
+                joint_state(['wheel'], [1.0], [], position=[])):
+        raw = raw_of(msg, 'sensor_msgs/msg/JointState')
+        for tail in (bytes(12), bytes(8) + b'S' + bytes(3)):  # learnt, then cached
+            assert decode(raw + tail) == decode(raw) == reference(
+                SPEC[InputKind.JOINT_STATE], raw)
+    raw = raw_of(JOINT_STATES[0], 'sensor_msgs/msg/JointState')
+    assert decode(raw + bytes(33))[3] == Defect.UNDECODABLE  # beyond any alignment
+    assert decode.fallbacks == 1
 
 
 def test_layout_change_of_the_same_length_is_not_read_with_the_old_offsets():

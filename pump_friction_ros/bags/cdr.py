@@ -10,20 +10,23 @@ layout, big-endian CDR) is decoded by rosbags' own deserialiser and the node's c
 (`ros_messages.input_sample`) instead; both paths give the same samples (tested). Every
 length read from a payload is checked against the bytes left, so a corrupted count cannot
 make the parser loop or read past the end: such a message is undecodable, and counted.
-Strings are checked as rosbags checks them (NUL terminator, UTF-8): a message rosbags
-refuses is never read by the batch path.
+Strings are checked as rosbags checks them (NUL terminator, UTF-8). After the last field a
+payload may carry up to `MAX_TRAILING_PADDING` bytes of padding, whose values CDR leaves
+unspecified: Fast DDS's ``rmw_serialize`` (rclpy's ``serialize_message``) sizes its buffer by
+an estimate that counts 8-byte alignment for every empty ``double[]``, so a JointState with
+empty position and effort comes back 12 bytes longer than the wire message (92 B for 80 B),
+and those bytes are not always zero (measured: one was 0x53). rclpy's deserialiser reads
+such a message; rosbags' refuses more than 3 trailing bytes, so it is read by this parser
+alone. A longer tail makes the payload one the parser does not take.
 
-`MessageDecoder` does the same for one message at a time: the live node subscribes raw
-(serialised) messages and decodes them here, which costs less than rclpy building a Python
-message object per message. The node and the replay thus read the same bytes the same way.
+``cdr_message.MessageDecoder`` does the same for one message at a time (the live node), with
+the layout parser here: the node and the replay read the same bytes the same way.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 import math
-import struct
 from typing import Any
 
 import numpy as np
@@ -31,15 +34,53 @@ import numpy as np
 from ..inputs import Defect, FLOAT64, InputSpec, JOINT_STATE
 from ..ros_messages import input_sample, stamp_to_ns
 
-__all__ = ['Decoded', 'MessageDecoder', 'TopicDecoder', 'joint_layout']
+__all__ = ['CDR_LE', 'MAX_TRAILING_PADDING', 'Decoded', 'JointLayout', 'LayoutError',
+           'TopicDecoder', 'align', 'check_end', 'header_end', 'joint_layout']
+
+
+MAX_TRAILING_PADDING = 32
+"""
+Bytes of any value accepted after a payload's last field [bytes].
+
+Fast DDS's size estimate adds at most 7 bytes of 8-byte alignment for each of JointState's
+three ``double[]`` and at most 7 at the end: 28 < 32 (measured: 12 with two empty arrays).
+"""
+
+
+CDR_LE = b'\x00\x01'  # encapsulation of little-endian plain CDR
 
 
 class LayoutError(ValueError):
     """A payload that does not parse as the expected message."""
 
 
-def _align(pos: int, size: int) -> int:
+def align(pos: int, size: int) -> int:
+    """Return ``pos`` rounded up to a multiple of ``size`` (CDR alignment) [bytes]."""
     return pos + (-pos % size)
+
+
+def check_end(raw: bytes, payload_end: int, what: str) -> None:
+    """
+    Check that nothing but padding follows the last field (payload offset ``payload_end``).
+
+    Parameters
+    ----------
+    raw : bytes
+        The serialised message, with its 4-byte encapsulation header.
+    payload_end : int
+        Payload offset just after the last field.
+    what : str
+        The message type, for the error.
+
+    Raises
+    ------
+    LayoutError
+        The payload is shorter, or followed by more than `MAX_TRAILING_PADDING` bytes.
+
+    """
+    extra = len(raw) - 4 - payload_end
+    if extra < 0 or extra > MAX_TRAILING_PADDING:
+        raise LayoutError(f'{what} length mismatch')
 
 
 def _u32(raw: bytes, pos: int) -> int:
@@ -88,8 +129,8 @@ def _string(raw: bytes, pos: int, what: str) -> tuple[str, int]:
         raise LayoutError(f'{what} is not UTF-8') from exc
 
 
-def _header_end(raw: bytes) -> int:
-    """Payload offset after std_msgs/Header (stamp + frame_id), raising on a bad frame_id."""
+def header_end(raw: bytes) -> int:
+    """Return the payload offset after std_msgs/Header (stamp, frame_id); LayoutError if bad."""
     return _string(raw, 8, 'frame_id')[1]  # payload offsets: 0 sec, 4 nanosec, 8 frame_id
 
 
@@ -99,6 +140,7 @@ class JointLayout:
 
     header_end: int
     names_end: int
+    payload_end: int  # just after the effort array; padding may follow
     array_count_offsets: tuple[int, int, int]  # position, velocity, effort length fields
     index: int  # of the joint, -1 when absent
     velocity: int | None  # offset of the joint's velocity, None when the array is empty
@@ -126,11 +168,11 @@ def joint_layout(raw: bytes, joint: str) -> JointLayout:
     ------
     LayoutError
         A count or length beyond the payload, a string rosbags would refuse, or bytes left
-        over.
+        over beyond `MAX_TRAILING_PADDING`.
 
     """
-    end = _header_end(raw)
-    pos = _align(end, 4)
+    end = header_end(raw)
+    pos = align(end, 4)
     count = _u32(raw, pos)
     pos += 4
     if count > (len(raw) - 4 - pos) // 5:  # each name takes at least 5 bytes
@@ -139,24 +181,23 @@ def joint_layout(raw: bytes, joint: str) -> JointLayout:
     for _ in range(count):
         name, end = _string(raw, pos, 'name')
         names.append(name)
-        pos = _align(end, 4)
+        pos = align(end, 4)
     names_end = pos
     index = names.index(joint) if joint in names else -1
     counts, firsts, length_at = [], [], []
     for _ in range(3):  # position, velocity, effort
-        pos = _align(pos, 4)
+        pos = align(pos, 4)
         length_at.append(pos)
         n = _u32(raw, pos)
         pos += 4
         if n:
-            pos = _align(pos, 8)
+            pos = align(pos, 8)
         if 4 + pos + 8 * n > len(raw):
             raise LayoutError('array length beyond the payload')
         counts.append(n)
         firsts.append(pos)
         pos += 8 * n
-    if 4 + pos != len(raw):
-        raise LayoutError('JointState length mismatch')
+    check_end(raw, pos, 'JointState')
     velocity = effort = None
     if index < 0:
         defect = Defect.MISSING_JOINT
@@ -166,7 +207,7 @@ def joint_layout(raw: bytes, joint: str) -> JointLayout:
         defect = Defect.NONE
         velocity = firsts[1] + 8 * index if counts[1] else None
         effort = firsts[2] + 8 * index if counts[2] else None
-    return JointLayout(end, names_end, (length_at[0], length_at[1], length_at[2]), index,
+    return JointLayout(end, names_end, pos, (length_at[0], length_at[1], length_at[2]), index,
                        velocity, effort, defect)
 
 
@@ -239,15 +280,18 @@ class TopicDecoder:
 
     def _decode_group(self, raws: list[bytes], idx: list[int], length: int,
                       out: Decoded) -> None:
-        first = raws[idx[0]]
-        try:
-            if first[:2] != b'\x00\x01':
-                raise LayoutError('not little-endian CDR')
-            layout = self._layout(first)
-        except LayoutError:
-            for i in idx:
+        """Decode messages of one length: the first the parser takes sets the layout."""
+        start = 0
+        for i in idx:
+            try:
+                layout = self._little_endian_layout(raws[i])
+                break
+            except LayoutError:
                 self._slow(i, raws[i], out)
+                start += 1
+        else:
             return
+        idx, first = idx[start:], raws[idx[start]]
         rows = np.frombuffer(b''.join(raws[i] for i in idx), dtype=np.uint8).reshape(
             len(idx), length)
         same = self._same_structure(rows, first, layout)
@@ -255,19 +299,32 @@ class TopicDecoder:
         if fast.size:
             self._fill(rows[same], fast, layout, out)
         for i in np.asarray(idx)[~same].tolist():
-            self._slow(i, raws[i], out)
+            self._alone(i, raws[i], out)
+
+    def _alone(self, i: int, raw: bytes, out: Decoded) -> None:
+        """Decode a message whose layout differs from its group's: parsed alone, else rosbags."""
+        try:
+            layout = self._little_endian_layout(raw)
+        except LayoutError:
+            self._slow(i, raw, out)
+            return
+        self._fill(np.frombuffer(raw, np.uint8).reshape(1, len(raw)), np.array([i]), layout,
+                   out)
+
+    def _little_endian_layout(self, raw: bytes) -> Any:
+        if raw[:2] != CDR_LE:
+            raise LayoutError('not little-endian CDR')
+        return self._layout(raw)
 
     def _layout(self, raw: bytes) -> Any:
         if self.msgtype == FLOAT64:
-            if len(raw) != 12:
-                raise LayoutError('Float64 length')
+            check_end(raw, 8, FLOAT64)
             return None
         if self.msgtype == JOINT_STATE:
             return joint_layout(raw, self.joint)
-        end = _header_end(raw)
-        first_double = _align(end, 8)
-        if 4 + first_double + 16 != len(raw):
-            raise LayoutError(f'{self.msgtype} length mismatch')
+        end = header_end(raw)
+        first_double = align(end, 8)
+        check_end(raw, first_double + 16, self.msgtype)
         return end, first_double
 
     def _same_structure(self, rows: np.ndarray, first: bytes, layout: Any) -> np.ndarray:
@@ -325,122 +382,3 @@ class TopicDecoder:
         if torque is not None:
             out.torques[i] = torque
             out.has_torque[i] = True
-
-
-_STAMP = struct.Struct('<iI')
-_DOUBLE = struct.Struct('<d')
-_CDR_LE = b'\x00\x01'
-
-
-class MessageDecoder:
-    """
-    Decodes one input topic's raw CDR messages one at a time (the node's raw subscriptions).
-
-    The layout of the last JointState parsed is kept: a message of the same length whose
-    layout-defining bytes (frame_id, joint names, array lengths) equal that one's is read
-    with two unpacks; any other is parsed again (`joint_layout`). A payload the parser does
-    not take (big-endian CDR, a layout it does not know) is deserialised by ``deserialize``
-    and converted by `ros_messages.input_sample`, so both paths give the same sample.
-
-    Parameters
-    ----------
-    spec : InputSpec
-        The input (message type, value field, stamp rule).
-    joint_name : str
-        JointState: the pump shaft's joint.
-    deserialize : callable
-        ``deserialize(raw)`` returns the message object (rclpy's ``deserialize_message``
-        in the node, rosbags' ``deserialize_cdr`` in the tests).
-
-    """
-
-    def __init__(self, spec: InputSpec, joint_name: str,
-                 deserialize: Callable[[bytes], Any]) -> None:
-        self.spec = spec
-        self.joint = joint_name
-        self.deserialize = deserialize
-        self.fallbacks = 0
-        self._length = -1
-        self._checks: tuple[tuple[int, int, bytes], ...] = ()
-        self._layout: JointLayout | None = None
-        self._decode = {JOINT_STATE: self._joint_state, FLOAT64: self._float64}.get(
-            spec.msgtype, self._header_and_double)
-
-    def __call__(self, raw: bytes) -> tuple[int | None, float | None, float | None, Defect]:
-        """
-        Decode one message.
-
-        Parameters
-        ----------
-        raw : bytes
-            The serialised message, with its encapsulation header.
-
-        Returns
-        -------
-        tuple
-            (header stamp [ns] or None when zero or absent, value or None, torque [N m] or
-            None, `Defect`), the values in SI as `ros_messages.input_sample` gives them.
-
-        """
-        try:
-            if raw[:2] != _CDR_LE:
-                raise LayoutError('not little-endian CDR')
-            return self._decode(raw)
-        except (LayoutError, UnicodeDecodeError, struct.error):
-            return self._slow(raw)
-
-    def _stamp(self, raw: bytes) -> int | None:
-        sec, nanosec = _STAMP.unpack_from(raw, 4)
-        return (sec * 1_000_000_000 + nanosec) or None
-
-    def _float64(self, raw: bytes) -> tuple[None, float, None, Defect]:
-        if len(raw) != 12:
-            raise LayoutError('Float64 length')
-        return None, _DOUBLE.unpack_from(raw, 4)[0], None, Defect.NONE
-
-    def _header_and_double(self, raw: bytes) -> tuple[int | None, float, None, Defect]:
-        first_double = _align(_header_end(raw), 8)
-        if 4 + first_double + 16 != len(raw):
-            raise LayoutError(f'{self.spec.msgtype} length mismatch')
-        return self._stamp(raw), _DOUBLE.unpack_from(raw, 4 + first_double)[0], None, \
-            Defect.NONE
-
-    def _joint_state(self, raw: bytes
-                     ) -> tuple[int | None, float | None, float | None, Defect]:
-        layout = self._layout
-        if layout is None or len(raw) != self._length:
-            layout = self._learn(raw)
-        else:
-            for a, b, ref in self._checks:
-                if raw[a:b] != ref:
-                    layout = self._learn(raw)
-                    break
-        if layout.defect:
-            return None, None, None, layout.defect
-        velocity = None if layout.velocity is None \
-            else _DOUBLE.unpack_from(raw, 4 + layout.velocity)[0]
-        effort = None if layout.effort is None \
-            else _DOUBLE.unpack_from(raw, 4 + layout.effort)[0]
-        sec, nanosec = _STAMP.unpack_from(raw, 4)
-        return (sec * 1_000_000_000 + nanosec) or None, velocity, effort, Defect.NONE
-
-    def _learn(self, raw: bytes) -> JointLayout:
-        """Parse a JointState layout and keep it, with the bytes that must match it."""
-        layout = joint_layout(raw, self.joint)
-        spans = [(12, 4 + layout.names_end)] + [(4 + at, 8 + at)
-                                                for at in layout.array_count_offsets]
-        self._checks = tuple((a, b, raw[a:b]) for a, b in spans)
-        self._length = len(raw)
-        self._layout = layout
-        return layout
-
-    def _slow(self, raw: bytes) -> tuple[int | None, float | None, float | None, Defect]:
-        """Deserialise with ``deserialize`` and convert with the node's message function."""
-        self.fallbacks += 1
-        try:
-            msg = self.deserialize(raw)
-        except Exception:
-            return None, None, None, Defect.UNDECODABLE
-        value, torque, defect = input_sample(self.spec, msg, self.joint)
-        stamp = stamp_to_ns(msg.header.stamp) if self.spec.has_header else None
-        return stamp, value, torque, defect

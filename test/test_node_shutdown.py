@@ -1,0 +1,73 @@
+"""
+The node process stops cleanly as ROS users stop it: Ctrl-C (twice: launch forwards one), SIGTERM.
+
+Real rclpy in a child process; skipped with the reason where rclpy is missing.
+"""
+
+import os
+from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
+
+from pump_friction_ros.table import build_table
+import pytest
+
+pytest.importorskip('rclpy', reason='rclpy is not importable: install the Jazzy wheels '
+                    '(tools/test.sh) or source ROS 2 Jazzy')
+
+REPO = Path(__file__).resolve().parents[1]
+PARAMS = REPO / 'config' / 'torque_estimator.yaml'
+STARTED = b'pump hong_doh_2004'
+
+
+@pytest.fixture(scope='module')
+def table_file(tmp_path_factory, paper_params):
+    return str(build_table(paper_params).save(tmp_path_factory.mktemp('t') / 'table.npz'))
+
+
+def start_node(table_file, tmp_path):
+    env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM='0', PYTHONUNBUFFERED='1',
+               ROS_LOG_DIR=str(tmp_path / 'log'))
+    env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
+         str(PARAMS), '-p', f'table_file:={table_file}'],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    seen = b''
+    end = time.monotonic() + 60.0
+    while STARTED not in seen and time.monotonic() < end:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        seen += line
+    assert STARTED in seen, seen.decode(errors='replace')
+    return proc
+
+
+@pytest.mark.parametrize('signals, gap_s', [
+    ((signal.SIGINT,), 0.0),
+    ((signal.SIGINT, signal.SIGINT), 0.0),  # a terminal's Ctrl-C, then launch's own SIGINT
+    ((signal.SIGINT, signal.SIGINT), 0.002),
+    ((signal.SIGINT, signal.SIGINT), 0.02),
+    ((signal.SIGINT, signal.SIGINT, signal.SIGINT), 0.005),
+    ((signal.SIGTERM,), 0.0),
+    ((signal.SIGTERM, signal.SIGTERM), 0.002),
+    ((signal.SIGINT, signal.SIGTERM), 0.002),  # launch escalates to SIGTERM
+], ids=lambda v: '-'.join(s.name for s in v) if isinstance(v, tuple) else f'{v * 1e3:g}ms')
+def test_node_exits_0_with_one_line_on_signals(table_file, tmp_path, signals, gap_s):
+    proc = start_node(table_file, tmp_path)
+    for sig in signals:
+        os.killpg(proc.pid, sig)  # to the whole process group, as a terminal sends it
+        time.sleep(gap_s)
+    try:
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    text = err.decode(errors='replace')
+    assert proc.returncode == 0, text
+    assert 'Traceback' not in text and 'KeyboardInterrupt' not in text, text
+    stops = [line for line in text.splitlines() if 'stopping' in line]
+    assert len(stops) == 1, text
+    assert signals[0].name in stops[0]
