@@ -11,12 +11,11 @@ import math
 
 import numpy as np
 
-from .params import Bearing, Geometry, ValvePlate
+from .params import Bearing, ValvePlate
 from .units import CST_PER_M2_S, MM_TO_M, NMM_TO_NM, RPM_TO_RAD_S
 
 __all__ = [
     'PALMGREN_THRESHOLD_CST_RPM',
-    'barrel_effective_area_m2',
     'bearing_torque_nm',
     'couette_land_integral_m4',
     'smooth_sign',
@@ -72,33 +71,6 @@ def smooth_sign_scalar(speed_rad_s: float, threshold_rad_s: float) -> float:
 
     """
     return math.tanh(speed_rad_s / threshold_rad_s)
-
-
-def barrel_effective_area_m2(geom: Geometry, vp: ValvePlate) -> float:
-    """
-    Net area A_b pressing the barrel on the valve plate per chamber, eq. (9).
-
-    A_b = A_p - pi/(2N) [(R_o^2 - r_o^2)/ln(R_o/r_o) - (R_i^2 - r_i^2)/ln(R_i/r_i)]: the
-    piston area minus the lift of the radial pressure field under the lands.
-
-    Parameters
-    ----------
-    geom : Geometry
-        Pump geometry (piston area, number of pistons).
-    vp : ValvePlate
-        Valve-plate radii.
-
-    Returns
-    -------
-    float
-        A_b [m^2].
-
-    """
-    r_in, p_in = vp.land_inner_radius_m, vp.port_inner_radius_m
-    p_out, r_out = vp.port_outer_radius_m, vp.land_outer_radius_m
-    outer = (r_out**2 - p_out**2) / math.log(r_out / p_out)
-    inner = (r_in**2 - p_in**2) / math.log(r_in / p_in)
-    return geom.piston_area_m2 - math.pi / (2.0 * geom.n_pistons) * (outer - inner)
 
 
 def valve_plate_coulomb_torque_nm(normal_force_n: np.ndarray, speed_abs_rad_s: np.ndarray,

@@ -27,14 +27,13 @@ from numpy.typing import ArrayLike
 
 from .dynamics import solve_piston_loads
 from .friction import (
-    barrel_effective_area_m2,
     bearing_torque_nm,
     smooth_sign,
     valve_plate_coulomb_torque_nm,
     valve_plate_viscous_torque_nm,
 )
 from .kinematics import piston_kinematics
-from .params import PumpParams
+from .params import barrel_effective_area_m2, PumpParams
 from .pressure import chamber_pressure
 
 __all__ = [

@@ -4,19 +4,21 @@ Pump parameter sets: loading, validation and hashing of the YAML files in ``conf
 Every value is SI. The YAML files say, value by value, where each number comes from
 (Hong & Doh 2004 table, figure or text; or how it was fixed when the paper leaves it open).
 
-Longer than 500 lines because each parameter's dataclass field, its physical range and the
-reason for that range are kept side by side, one schema read in one place.
+Each value is declared once: its dataclass field carries how it is read and its physical
+range (`_number`, `_length`, ...), and `pump_from_mapping` reads every section from those
+declarations; only checks across fields are written out. Longer than 500 lines because the
+ranges' reasons, the field declarations and that one reader are kept together.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
 import hashlib
 from itertools import pairwise
 import json
 import math
 from pathlib import Path
-from typing import Any, overload
+from typing import Any, get_type_hints, overload
 
 import numpy as np
 import yaml
@@ -34,6 +36,7 @@ __all__ = [
     'PistonFriction',
     'PumpParams',
     'ValvePlate',
+    'barrel_effective_area_m2',
     'config_dir',
     'default_pump_file',
     'load_pump',
@@ -58,6 +61,42 @@ VISCOSITY_RANGE_M2_S = (1e-7, 1e-2)
 """0.1 cSt (below any hydraulic fluid: water is 1 cSt) to 10,000 cSt (cold gear oil)."""
 MIN_INCLINATION_RAD = math.radians(1.0)
 """1 deg: bent-axis units run at 15-45 deg; near 0 the stroke vanishes."""
+
+
+# Each pump-file value is declared once, as a dataclass field whose metadata say how it is read
+# and its physical range; `pump_from_mapping` reads every section from these declarations.
+Meta = dict[str, Any]
+
+
+def _number(low: float | None = None, high: float | None = None, *,
+            low_inclusive: bool = False) -> Meta:
+    """Declare a finite number in (low, high] ([low, high] with ``low_inclusive``)."""
+    return {'read': 'number', 'low': low, 'high': high, 'low_inclusive': low_inclusive}
+
+
+def _length(high_m: float) -> Meta:
+    """Declare a length in [`MIN_LENGTH_M`, high_m] [m]."""
+    return _number(MIN_LENGTH_M, high_m, low_inclusive=True)
+
+
+def _zero_to(high: float) -> Meta:
+    """Declare a non-negative number in [0, high]."""
+    return _number(0.0, high, low_inclusive=True)
+
+
+def _integer(low: int) -> Meta:
+    """Declare an integer >= low."""
+    return {'read': 'integer', 'low': low}
+
+
+def _text(choices: tuple[str, ...] | None = None) -> Meta:
+    """Declare a string, one of ``choices`` if given."""
+    return {'read': 'text', 'choices': choices}
+
+
+def _curve(x_key: str) -> Meta:
+    """Declare a measured coefficient curve in [0, 1], its abscissa under ``x_key``."""
+    return {'read': 'curve', 'x_key': x_key}
 
 
 @dataclass(frozen=True)
@@ -101,14 +140,15 @@ class Curve:
 class Geometry:
     """Kinematic geometry of the bent-axis pump (Table 1, Fig. 2(a))."""
 
-    n_pistons: int
-    bore_diameter_m: float
-    inclination_rad: float
-    joint_pitch_radius_m: float
-    bore_pitch_radius_m: float
-    rod_length_m: float
-    joint_ball_radius_m: float
-    head_radius_m: float
+    n_pistons: int = field(metadata=_integer(3))
+    bore_diameter_m: float = field(metadata=_length(0.5))
+    inclination_rad: float = field(metadata=_number(MIN_INCLINATION_RAD, math.radians(60.0),
+                                                    low_inclusive=True))
+    joint_pitch_radius_m: float = field(metadata=_length(0.5))
+    bore_pitch_radius_m: float = field(metadata=_length(0.5))
+    rod_length_m: float = field(metadata=_length(1.0))
+    joint_ball_radius_m: float = field(metadata=_length(0.1))
+    head_radius_m: float = field(metadata=_length(0.25))
 
     @property
     def piston_area_m2(self) -> float:
@@ -136,22 +176,23 @@ class Geometry:
 class Piston:
     """Mass properties of one piston (axisymmetric rigid body)."""
 
-    mass_kg: float
-    joint_to_cg_m: float
-    inertia_axial_kg_m2: float
-    inertia_transverse_kg_m2: float
+    mass_kg: float = field(metadata=_number(MIN_PISTON_MASS_KG, 10.0, low_inclusive=True))
+    joint_to_cg_m: float = field(metadata=_zero_to(1.0))
+    inertia_axial_kg_m2: float = field(metadata=_zero_to(1.0))
+    inertia_transverse_kg_m2: float = field(metadata=_zero_to(1.0))
 
 
 @dataclass(frozen=True)
 class ValvePlate:
     """Valve-plate geometry (Fig. 2(b)) and friction data (Figs. 6, 7)."""
 
-    land_inner_radius_m: float
-    port_inner_radius_m: float
-    port_outer_radius_m: float
-    land_outer_radius_m: float
-    film_clearance_m: float
-    coulomb_coefficient: Curve  # x: |shaft speed| [rad/s]
+    land_inner_radius_m: float = field(metadata=_length(0.5))
+    port_inner_radius_m: float = field(metadata=_length(0.5))
+    port_outer_radius_m: float = field(metadata=_length(0.5))
+    land_outer_radius_m: float = field(metadata=_length(0.5))
+    film_clearance_m: float = field(metadata=_number(*FILM_CLEARANCE_RANGE_M, low_inclusive=True))
+    # x: |shaft speed| [rad/s]
+    coulomb_coefficient: Curve = field(metadata=_curve('speed_rad_s'))
 
     @property
     def friction_radius_m(self) -> float:
@@ -175,46 +216,47 @@ class ValvePlate:
 class Bearing:
     """Shaft-bearing coefficients of Palmgren's eq. (10), in its catalogue units."""
 
-    f0: float
-    f1: float
-    a: float
-    b: float
-    mean_diameter_m: float
+    f0: float = field(metadata=_number(0.0, 100.0))
+    f1: float = field(metadata=_zero_to(1.0))
+    a: float = field(metadata=_number(0.0, 3.0))
+    b: float = field(metadata=_number(0.0, 3.0))
+    mean_diameter_m: float = field(metadata=_length(1.0))
 
 
 @dataclass(frozen=True)
 class PistonFriction:
     """Friction of the spherical joints and piston heads (Fig. 9, eqs. 3-5)."""
 
-    joint_coefficient: Curve  # x: sliding speed [m/s]
-    head_coefficient: Curve  # x: sliding speed [m/s]
-    joint_sliding_frame: str
+    # x: sliding speed [m/s]
+    joint_coefficient: Curve = field(metadata=_curve('sliding_speed_m_s'))
+    head_coefficient: Curve = field(metadata=_curve('sliding_speed_m_s'))
+    joint_sliding_frame: str = field(metadata=_text(JOINT_SLIDING_FRAMES))
 
 
 @dataclass(frozen=True)
 class Oil:
     """Hydraulic oil properties."""
 
-    density_kg_m3: float
-    viscosity_m2_s: float
+    density_kg_m3: float = field(metadata=_number(100.0, 3000.0))
+    viscosity_m2_s: float = field(metadata=_number(*VISCOSITY_RANGE_M2_S, low_inclusive=True))
 
 
 @dataclass(frozen=True)
 class Operation:
     """Operating conventions: charge pressure, zero-speed smoothing, efficiency domain."""
 
-    charge_pressure_pa: float
-    zero_speed_threshold_rad_s: float
-    efficiency_min_speed_rad_s: float
-    efficiency_min_pressure_pa: float
+    charge_pressure_pa: float = field(metadata=_zero_to(1e7))
+    zero_speed_threshold_rad_s: float = field(metadata=_number(0.0, 100.0))
+    efficiency_min_speed_rad_s: float = field(metadata=_number(0.0, 1e4))
+    efficiency_min_pressure_pa: float = field(metadata=_number(0.0, 2e8))
 
 
 @dataclass(frozen=True)
 class PumpParams:
     """A complete, validated pump parameter set (SI units throughout)."""
 
-    name: str
-    description: str
+    name: str = field(metadata=_text())
+    description: str = field(metadata=_text())
     geometry: Geometry
     piston: Piston
     valve_plate: ValvePlate
@@ -341,9 +383,99 @@ class _Section:
                               f'{", ".join(quote(k) for k in unknown)}')
 
 
+def barrel_effective_area_m2(geom: Geometry, vp: ValvePlate) -> float:
+    """
+    Net area A_b pressing the barrel on the valve plate per chamber, eq. (9).
+
+    A_b = A_p - pi/(2N) [(R_o^2 - r_o^2)/ln(R_o/r_o) - (R_i^2 - r_i^2)/ln(R_i/r_i)]: the
+    piston area minus the lift of the radial pressure field under the lands. A property of
+    the pump's geometry, so it lives here: the file check needs it, the friction uses it.
+
+    Parameters
+    ----------
+    geom : Geometry
+        Pump geometry (piston area, number of pistons).
+    vp : ValvePlate
+        Valve-plate radii.
+
+    Returns
+    -------
+    float
+        A_b [m^2].
+
+    """
+    r_in, p_in = vp.land_inner_radius_m, vp.port_inner_radius_m
+    p_out, r_out = vp.port_outer_radius_m, vp.land_outer_radius_m
+    outer = (r_out**2 - p_out**2) / math.log(r_out / p_out)
+    inner = (r_in**2 - p_in**2) / math.log(r_in / p_in)
+    return geom.piston_area_m2 - math.pi / (2.0 * geom.n_pistons) * (outer - inner)
+
+
+def _read_fields(cls: Any, section: _Section) -> dict[str, Any]:
+    """Read the fields of dataclass ``cls`` that carry a declaration (`_number` & co.)."""
+    values: dict[str, Any] = {}
+    for item in fields(cls):
+        meta = item.metadata
+        read = meta.get('read')
+        if read == 'number':
+            values[item.name] = section.number(item.name, low=meta['low'], high=meta['high'],
+                                               low_inclusive=meta['low_inclusive'])
+        elif read == 'integer':
+            values[item.name] = section.integer(item.name, low=meta['low'])
+        elif read == 'text':
+            values[item.name] = section.text(item.name, meta['choices'])
+        elif read == 'curve':
+            values[item.name] = section.curve(item.name, meta['x_key'])
+    return values
+
+
+def _check_geometry(g: Geometry, where: str) -> None:
+    offset = 2.0 * g.joint_pitch_radius_m
+    if g.rod_length_m <= offset:
+        raise ConfigError(f'{where}: geometry.rod_length_m: must exceed 2 x joint_pitch_radius_m'
+                          f' ({offset:g} m) for the piston to stay in its bore')
+    # the bores must not cut into each other: centres 2 R_C sin(pi / N) apart on the pitch
+    # circle, more than a bore diameter (this also bounds N: 1e9 pistons fit no barrel)
+    spacing = 2.0 * g.bore_pitch_radius_m * math.sin(math.pi / g.n_pistons)
+    if spacing <= g.bore_diameter_m:
+        raise ConfigError(f'{where}: geometry.n_pistons: {quote(g.n_pistons)} bores of '
+                          f'{g.bore_diameter_m:g} m do not fit on the bore pitch circle'
+                          f' of radius {g.bore_pitch_radius_m:g} m (adjacent centres '
+                          f'{spacing:.3g} m apart)')
+
+
+def _check_piston(piston: Piston, sections: dict[str, Any], where: str) -> None:
+    if piston.joint_to_cg_m > sections['geometry'].rod_length_m:
+        raise ConfigError(f'{where}: piston.joint_to_cg_m: must not exceed geometry.rod_length_m')
+
+
+def _check_valve_plate(vp: ValvePlate, sections: dict[str, Any], where: str) -> None:
+    radii = (vp.land_inner_radius_m, vp.port_inner_radius_m, vp.port_outer_radius_m,
+             vp.land_outer_radius_m)
+    if not all(a < b for a, b in pairwise(radii)):
+        raise ConfigError(f'{where}: valve_plate: radii must satisfy R_i < r_i < r_o < R_o')
+    area = barrel_effective_area_m2(sections['geometry'], vp)
+    if area <= 0.0:  # the film's pressure field outweighs the pistons: the barrel lifts off
+        raise ConfigError(f'{where}: valve_plate: the pressure field under the lands lifts '
+                          f'more than the piston area presses (A_b = {area:.3g} m^2 <= 0, '
+                          'eq. 9): the barrel would lift off; check the radii against '
+                          'geometry.bore_diameter_m and n_pistons')
+
+
+# What one field's range cannot say: checks across fields, run after their section is read.
+_SECTION_CHECKS: dict[str, Any] = {
+    'geometry': lambda g, sections, where: _check_geometry(g, where),
+    'piston': _check_piston,
+    'valve_plate': _check_valve_plate,
+}
+
+
 def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
     """
     Build a validated `PumpParams` from the parsed YAML mapping.
+
+    Each value is read as its dataclass field declares it (type and physical range), section
+    by section in `PumpParams` order; checks across fields follow their section.
 
     Parameters
     ----------
@@ -364,117 +496,25 @@ def pump_from_mapping(data: Any, where: str = '<mapping>') -> PumpParams:
 
     """
     top = _Section(data, '', where)
-    name = top.text('name')
-    description = top.text('description')
-
-    length: dict[str, Any] = {'low': MIN_LENGTH_M, 'low_inclusive': True}
-    g = top.section('geometry')
-    geometry = Geometry(
-        n_pistons=g.integer('n_pistons', low=3),
-        bore_diameter_m=g.number('bore_diameter_m', high=0.5, **length),
-        inclination_rad=g.number('inclination_rad', low=MIN_INCLINATION_RAD,
-                                 high=math.radians(60.0), low_inclusive=True),
-        joint_pitch_radius_m=g.number('joint_pitch_radius_m', high=0.5, **length),
-        bore_pitch_radius_m=g.number('bore_pitch_radius_m', high=0.5, **length),
-        rod_length_m=g.number('rod_length_m', high=1.0, **length),
-        joint_ball_radius_m=g.number('joint_ball_radius_m', high=0.1, **length),
-        head_radius_m=g.number('head_radius_m', high=0.25, **length),
-    )
-    g.finish()
-    offset = 2.0 * geometry.joint_pitch_radius_m
-    if geometry.rod_length_m <= offset:
-        raise ConfigError(f'{where}: geometry.rod_length_m: must exceed 2 x joint_pitch_radius_m'
-                          f' ({offset:g} m) for the piston to stay in its bore')
-    # the bores must not cut into each other: centres 2 R_C sin(pi / N) apart on the pitch
-    # circle, more than a bore diameter (this also bounds N: 1e9 pistons fit no barrel)
-    spacing = 2.0 * geometry.bore_pitch_radius_m * math.sin(math.pi / geometry.n_pistons)
-    if spacing <= geometry.bore_diameter_m:
-        raise ConfigError(f'{where}: geometry.n_pistons: {quote(geometry.n_pistons)} bores of '
-                          f'{geometry.bore_diameter_m:g} m do not fit on the bore pitch circle'
-                          f' of radius {geometry.bore_pitch_radius_m:g} m (adjacent centres '
-                          f'{spacing:.3g} m apart)')
-
-    p = top.section('piston')
-    piston = Piston(
-        mass_kg=p.number('mass_kg', low=MIN_PISTON_MASS_KG, high=10.0, low_inclusive=True),
-        joint_to_cg_m=p.number('joint_to_cg_m', low=0.0, high=1.0, low_inclusive=True),
-        inertia_axial_kg_m2=p.number('inertia_axial_kg_m2', low=0.0, high=1.0,
-                                     low_inclusive=True),
-        inertia_transverse_kg_m2=p.number('inertia_transverse_kg_m2', low=0.0, high=1.0,
-                                          low_inclusive=True),
-    )
-    p.finish()
-    if piston.joint_to_cg_m > geometry.rod_length_m:
-        raise ConfigError(f'{where}: piston.joint_to_cg_m: must not exceed geometry.rod_length_m')
-
-    v = top.section('valve_plate')
-    valve_plate = ValvePlate(
-        land_inner_radius_m=v.number('land_inner_radius_m', high=0.5, **length),
-        port_inner_radius_m=v.number('port_inner_radius_m', high=0.5, **length),
-        port_outer_radius_m=v.number('port_outer_radius_m', high=0.5, **length),
-        land_outer_radius_m=v.number('land_outer_radius_m', high=0.5, **length),
-        film_clearance_m=v.number('film_clearance_m', low=FILM_CLEARANCE_RANGE_M[0],
-                                  high=FILM_CLEARANCE_RANGE_M[1], low_inclusive=True),
-        coulomb_coefficient=v.curve('coulomb_coefficient', 'speed_rad_s'),
-    )
-    v.finish()
-    radii = (valve_plate.land_inner_radius_m, valve_plate.port_inner_radius_m,
-             valve_plate.port_outer_radius_m, valve_plate.land_outer_radius_m)
-    if not all(a < b for a, b in pairwise(radii)):
-        raise ConfigError(f'{where}: valve_plate: radii must satisfy R_i < r_i < r_o < R_o')
-    from .friction import barrel_effective_area_m2  # eq. (9); friction imports this module
-
-    area = barrel_effective_area_m2(geometry, valve_plate)
-    if area <= 0.0:  # the film's pressure field outweighs the pistons: the barrel lifts off
-        raise ConfigError(f'{where}: valve_plate: the pressure field under the lands lifts '
-                          f'more than the piston area presses (A_b = {area:.3g} m^2 <= 0, '
-                          'eq. 9): the barrel would lift off; check the radii against '
-                          'geometry.bore_diameter_m and n_pistons')
-
-    b = top.section('bearing')
-    bearing = Bearing(
-        f0=b.number('f0', low=0.0, high=100.0),
-        f1=b.number('f1', low=0.0, high=1.0, low_inclusive=True),
-        a=b.number('a', low=0.0, high=3.0),
-        b=b.number('b', low=0.0, high=3.0),
-        mean_diameter_m=b.number('mean_diameter_m', high=1.0, **length),
-    )
-    b.finish()
-
-    f = top.section('piston_friction')
-    piston_friction = PistonFriction(
-        joint_coefficient=f.curve('joint_coefficient', 'sliding_speed_m_s'),
-        head_coefficient=f.curve('head_coefficient', 'sliding_speed_m_s'),
-        joint_sliding_frame=f.text('joint_sliding_frame', JOINT_SLIDING_FRAMES),
-    )
-    f.finish()
-
-    o = top.section('oil')
-    oil = Oil(
-        density_kg_m3=o.number('density_kg_m3', low=100.0, high=3000.0),
-        viscosity_m2_s=o.number('viscosity_m2_s', low=VISCOSITY_RANGE_M2_S[0],
-                                high=VISCOSITY_RANGE_M2_S[1], low_inclusive=True),
-    )
-    o.finish()
-
-    op = top.section('operation')
-    operation = Operation(
-        charge_pressure_pa=op.number('charge_pressure_pa', low=0.0, high=1e7,
-                                     low_inclusive=True),
-        zero_speed_threshold_rad_s=op.number('zero_speed_threshold_rad_s', low=0.0, high=100.0),
-        efficiency_min_speed_rad_s=op.number('efficiency_min_speed_rad_s', low=0.0,
-                                             high=1e4),
-        efficiency_min_pressure_pa=op.number('efficiency_min_pressure_pa', low=0.0,
-                                             high=2e8),
-    )
-    op.finish()
+    values = _read_fields(PumpParams, top)
+    types = get_type_hints(PumpParams)
+    sections: dict[str, Any] = {}
+    for item in fields(PumpParams):
+        cls: Any = types[item.name]
+        is_section: bool = is_dataclass(cls)  # (a bool: no narrowing of cls)
+        if not is_section:
+            continue
+        section = top.section(item.name)
+        sections[item.name] = cls(**_read_fields(cls, section))
+        section.finish()
+        check = _SECTION_CHECKS.get(item.name)
+        if check is not None:
+            check(sections[item.name], sections, where)
     if 'provenance' in data:  # written by `pump_friction calibrate`; not a parameter
         if not isinstance(top.raw('provenance'), dict):
             raise ConfigError(f'{where}: provenance: expected a mapping')
     top.finish()
-    return PumpParams(name=name, description=description, geometry=geometry, piston=piston,
-                      valve_plate=valve_plate, bearing=bearing, piston_friction=piston_friction,
-                      oil=oil, operation=operation, source=where)
+    return PumpParams(**values, **sections, source=where)
 
 
 def load_pump(path: str | Path | None = None) -> PumpParams:

@@ -130,3 +130,25 @@ def test_a_huge_integer_is_quoted_without_printing_it():
     from pump_friction_ros.errors import quote
     assert quote(10**5000) == 'an integer too long to print'
     assert quote('x' * 10**6) == repr('x' * 60) + '...'
+
+
+def _numeric_keys(raw):
+    return [(section, key) for section, values in raw.items() if isinstance(values, dict)
+            and section != 'provenance'
+            for key, value in values.items() if isinstance(value, (int, float))
+            and not isinstance(value, bool)]
+
+
+@pytest.mark.parametrize('value', [1e30, -1.0, 'fast', None])
+def test_every_number_of_the_file_has_a_range_and_a_type(raw, value):
+    """No pump value is 1e30 (any unit), negative, text or missing: each is refused by name."""
+    keys = _numeric_keys(raw)
+    assert len(keys) == 27  # every number of the seven sections (curves apart)
+    for section, key in keys:
+        broken = copy.deepcopy(raw)
+        if value is None:
+            del broken[section][key]
+        else:
+            broken[section][key] = value
+        with pytest.raises(ConfigError, match=rf'{section}\.{key}: '):
+            pump_from_mapping(broken, 'pump.yaml')
