@@ -1,3 +1,17 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Friction laws of the valve plate (eq. 9) and the shaft bearing (eq. 10), Hong & Doh (2004).
 
@@ -12,7 +26,7 @@ import math
 import numpy as np
 
 from .params import Bearing, ValvePlate
-from .units import CST_PER_M2_S, MM_TO_M, NMM_TO_NM, RPM_TO_RAD_S
+from .units import m2_s_to_cst, MM_TO_M, NMM_TO_NM, rad_s_to_rpm
 
 __all__ = [
     'PALMGREN_THRESHOLD_CST_RPM',
@@ -179,8 +193,8 @@ def bearing_torque_nm(load_n: np.ndarray | float, speed_abs_rad_s: np.ndarray,
     """
     d_m_mm = bearing.mean_diameter_m / MM_TO_M
     mechanical = bearing.f1 * np.power(load_n, bearing.a) * d_m_mm**bearing.b * NMM_TO_NM
-    nu_n = (np.asarray(viscosity_m2_s, dtype=float) * CST_PER_M2_S
-            * (np.asarray(speed_abs_rad_s, dtype=float) / RPM_TO_RAD_S))
+    nu_n = (m2_s_to_cst(np.asarray(viscosity_m2_s, dtype=float))
+            * rad_s_to_rpm(np.asarray(speed_abs_rad_s, dtype=float)))
     fast = 1e-7 * bearing.f0 * np.power(np.maximum(nu_n, 0.0), 2.0 / 3.0) * d_m_mm**3
     slow = 160e-7 * bearing.f0 * d_m_mm**3
     viscous = np.where(nu_n >= PALMGREN_THRESHOLD_CST_RPM, fast, slow) * NMM_TO_NM

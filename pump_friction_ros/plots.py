@@ -1,3 +1,17 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """PNG figures: the model in the manner of Hong & Doh (2004) Figs. 3, 10-17, 19; replays."""
 
 from __future__ import annotations
@@ -9,7 +23,7 @@ import numpy as np
 from .config import EstimatorConfig
 from .model import COMPONENTS, PumpModel
 from .paper import MEASURED_EFFICIENCY_136_BAR
-from .units import BAR_TO_PA, RPM_TO_RAD_S
+from .units import BAR_TO_PA, pa_to_bar, RPM_TO_RAD_S
 
 __all__ = ['write_model_figures', 'write_replay_figures']
 
@@ -95,7 +109,7 @@ def write_model_figures(model: PumpModel, out_dir: Path) -> list[Path]:
 
     # Fig. 12: chamber pressure
     fig, ax = plt.subplots(figsize=(6.5, 4))
-    ax.plot(deg, wf.chamber_pressure_pa[0] / BAR_TO_PA)
+    ax.plot(deg, pa_to_bar(wf.chamber_pressure_pa[0]))
     ax.set(xlabel='piston phase angle [deg]', ylabel='chamber pressure [bar]')
     fig.suptitle('Fig. 12: chamber pressure, 300 bar')
     save(fig, 'fig12_chamber_pressure')

@@ -1,3 +1,17 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Calibration data: steady bench points from CSV files and bag samples as the replay reads them.
 
@@ -20,7 +34,7 @@ from ..errors import CalibrationError, quote
 from ..estimator import TEMPERATURE_RANGE_C
 from ..oil import WaltherViscosity
 from ..table import FrictionTable
-from ..units import BAR_TO_PA, CST_PER_M2_S, RPM_TO_RAD_S
+from ..units import BAR_TO_PA, cst_to_m2_s, RPM_TO_RAD_S
 
 __all__ = ['BAG_COLUMNS', 'MIN_SPEED_RAD_S', 'Samples', 'bag_estimates', 'load_bag_samples',
            'load_bench_csv', 'merge_samples', 'timeline_samples']
@@ -179,7 +193,7 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
         if cst.min() < 0.5:
             raise CalibrationError(f'{path}: viscosity_cst down to {cst.min():g}: that looks '
                                    'like m^2/s, the column is in cSt')
-        viscosity = cst / CST_PER_M2_S
+        viscosity = cst_to_m2_s(cst)
     elif extra == ['temperature_c']:
         temp = column['temperature_c']
         low, high = TEMPERATURE_RANGE_C  # the estimator's plausible oil temperatures

@@ -1,3 +1,17 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Calibration report: the result and its text, the calibrated pump file, report.json and plots.
 
@@ -21,7 +35,7 @@ from .fit import K_FOLDS
 from .. import __version__
 from ..errors import CalibrationError
 from ..params import load_pump, PumpParams
-from ..units import BAR_TO_PA, RPM_TO_RAD_S
+from ..units import pa_to_bar, rad_s_to_rpm
 
 if TYPE_CHECKING:
     from ruamel.yaml import YAML
@@ -264,8 +278,8 @@ def write_report(out_dir: Path, result: CalibrationResult, samples: Samples,
     (out_dir / 'report.json').write_text(json.dumps(payload, indent=2, default=float))
     (out_dir / 'report.txt').write_text(result.formatted() + '\n')
     plt = _pyplot()
-    rpm = samples.speed / RPM_TO_RAD_S
-    bar = samples.dp / BAR_TO_PA
+    rpm = rad_s_to_rpm(samples.speed)
+    bar = pa_to_bar(samples.dp)
     step = max(1, samples.speed.size // 20000)  # plot at most ~20k points
     sel = slice(None, None, step)
     for stem, axis, label in (('torque_vs_speed', rpm, 'shaft speed [rpm]'),
