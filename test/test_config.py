@@ -44,8 +44,7 @@ def shipped_parameters():
     return yaml.safe_load(SHIPPED.read_text())[f'/**/{NODE_NAME}']['ros__parameters']
 
 
-def test_every_config_field_is_one_parameter_with_a_description():
-    assert [p.name for p in PARAMETERS] == list(FIELDS)
+def test_every_parameter_has_a_one_line_description():
     for p in PARAMETERS:
         assert p.description.strip() and '\n' not in p.description, p.name
 
