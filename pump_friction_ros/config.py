@@ -30,10 +30,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from .errors import ConfigError, quote
 from .paths import resolve_path
+from .yaml_files import read_yaml
 
 __all__ = [
     'BAG_PARAMS_FILE',
@@ -353,20 +352,7 @@ def _resolved(checked: dict[str, Any], origins: dict[str, str], default_origin: 
 
 def _read_params_file(path: Path) -> dict[str, Any]:
     """Return the merged ``ros__parameters`` of one file's sections for this node."""
-    try:
-        data = yaml.safe_load(path.read_text(encoding='utf-8'))
-    except FileNotFoundError:
-        raise ConfigError(f'parameters file not found: {path}') from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f'cannot read parameters file {path}: '
-                          f'{getattr(exc, "strerror", None) or exc}') from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, 'problem_mark', None)
-        at = f' (line {mark.line + 1})' if mark else ''
-        raise ConfigError(f'{path}: invalid YAML{at}') from None
-    except (ValueError, RecursionError):  # a number of thousands of digits, deep nesting
-        raise ConfigError(f'{path}: invalid YAML: a number too long or nesting too deep') \
-            from None
+    data = read_yaml(path, 'parameters file')
     if not isinstance(data, dict):
         raise ConfigError(f'{path}: expected "{NODE_NAME}: ros__parameters: ..."')
     merged: dict[str, Any] = {}

@@ -35,10 +35,10 @@ from pathlib import Path
 from typing import Any, get_type_hints, overload
 
 import numpy as np
-import yaml
 
 from .errors import ConfigError, quote
 from .paths import config_dir, default_pump_file, resolve_path
+from .yaml_files import read_yaml
 
 __all__ = [
     'Bearing',
@@ -555,20 +555,4 @@ def load_pump(path: str | Path | None = None) -> PumpParams:
     """
     path = default_pump_file() if path is None or str(path) == '' else \
         resolve_path(path, 'pump file', pump_set=True)
-    try:
-        text = path.read_text(encoding='utf-8')
-    except FileNotFoundError:
-        raise ConfigError(f'pump file not found: {path}') from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f'cannot read pump file {path}: {exc}') from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, 'problem_mark', None)
-        at = f' (line {mark.line + 1}, column {mark.column + 1})' if mark else ''
-        problem = getattr(exc, 'problem', None) or 'invalid YAML'
-        raise ConfigError(f'{path}: invalid YAML{at}: {problem}') from None
-    except (ValueError, RecursionError):  # a number of thousands of digits, deep nesting
-        raise ConfigError(f'{path}: invalid YAML: a number too long or nesting too deep') \
-            from None
-    return pump_from_mapping(data, str(path))
+    return pump_from_mapping(read_yaml(path, 'pump file'), str(path))

@@ -23,7 +23,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'pump_friction_ros'
 ROS_MODULES = {'rclpy', 'rcl_interfaces', 'std_msgs', 'sensor_msgs', 'diagnostic_msgs',
                'std_srvs', 'builtin_interfaces', 'launch', 'launch_ros'}
 LAYERS = {  # a module may import modules of its own layer or below
-    0: {'__init__', 'units', 'errors', 'paths', 'params', 'kinematics', 'pressure', 'dynamics',
+    0: {'__init__', 'units', 'errors', 'paths', 'yaml_files', 'params', 'kinematics',
+        'pressure', 'dynamics',
         'friction', 'model', 'paper', 'oil'},
     1: {'table', 'table_io', 'progress', 'staging'},
     2: {'config', 'inputs', 'estimate', 'speed_filter', 'attribution', 'monitor', 'diagnostics',

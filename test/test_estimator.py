@@ -40,8 +40,8 @@ def make(table, config=CONFIG):
     return TorqueEstimator(config, table, 46e-6, 'hong_doh_2004')
 
 
-def test_expected_torque_at_steady_state_is_the_full_models_plus_drive_loss(table,
-                                                                           paper_model):
+def test_expected_torque_at_steady_state_is_the_full_models_plus_drive_loss(
+        table, paper_model):
     est = make(table)
     for k in range(200):
         est.on_pressure(k * NS // 1000, 150e5)

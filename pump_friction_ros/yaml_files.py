@@ -1,0 +1,67 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Reading a YAML file (pump files, node parameters files) with one-line errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import ConfigError
+
+__all__ = ['read_yaml']
+
+
+def read_yaml(path: Path, what: str) -> Any:
+    """
+    Parse a YAML file safely; every failure is one `ConfigError` line naming the file.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    what : str
+        What the file is, for the messages (``pump file``, ``parameters file``).
+
+    Returns
+    -------
+    Any
+        The parsed content (PyYAML's safe loader: plain data, no objects).
+
+    Raises
+    ------
+    ConfigError
+        The file is missing or unreadable, is not valid YAML (with the line and column), or
+        holds a number of thousands of digits or nesting too deep to parse.
+
+    """
+    try:
+        return yaml.safe_load(path.read_text(encoding='utf-8'))
+    except FileNotFoundError:
+        raise ConfigError(f'{what} not found: {path}') from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f'cannot read {what} {path}: '
+                          f'{getattr(exc, "strerror", None) or exc}') from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, 'problem_mark', None)
+        at = f' (line {mark.line + 1}, column {mark.column + 1})' if mark else ''
+        problem = getattr(exc, 'problem', None)
+        raise ConfigError(f'{path}: invalid YAML{at}' + (f': {problem}' if problem else '')) \
+            from None
+    except (ValueError, RecursionError):  # a number of thousands of digits, deep nesting
+        raise ConfigError(f'{path}: invalid YAML: a number too long or nesting too deep') \
+            from None
