@@ -403,7 +403,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--out', required=True, metavar='MY_PUMP.yaml', help='calibrated pump file')
     p.add_argument('--report', metavar='DIR', default=None, help='report.json and PNG plots')
     p.add_argument('--fix', nargs='+', default=[], metavar='NAME',
-                   help='hold these at their base values (see README)')
+                   help='hold these at their base values (see docs/calibration.md)')
     p.add_argument('--params', metavar='FILE', action='append', default=None,
                    help='node parameters (bags: topics, filter; oil; inertia and drive loss '
                    'start values); may be given several times, later files overriding')

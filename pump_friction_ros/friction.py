@@ -140,7 +140,7 @@ def valve_plate_viscous_torque_nm(speed_abs_rad_s: np.ndarray, viscosity_m2_s: n
     radial flow; shear stress rho nu omega r / h integrated over the lands gives
     T = rho nu |omega| / h * int r^3 dr dphi. It does not depend on the load pressure (the
     film is sheared whatever presses on it), which is why it is added to eq. (9) rather
-    than folded into its friction coefficient (see README, "paper fidelity").
+    than folded into its friction coefficient (see docs/model.md, "paper fidelity").
 
     Parameters
     ----------

@@ -17,7 +17,7 @@ CPU cost of the ``torque_estimator`` node next to a bare rclpy node, at 1 kHz in
 
 A benchmark, not a test: it prints figures and asserts nothing. Run it in a sourced ROS 2
 Jazzy shell (``python3 -m pump_friction_ros.measure_cpu`` or ``ros2 run pump_friction_ros
-measure_node_cpu``); README, "CPU cost", says how to read its output.
+measure_node_cpu``); docs/cpu_cost.md says how to read its output.
 
 Each run starts three processes from this module: a publisher (``sensor_msgs/JointState``
 at 1 kHz and ``sensor_msgs/FluidPressure`` at 500 Hz, header stamps from the system clock),

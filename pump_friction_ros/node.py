@@ -16,9 +16,9 @@
 ROS 2 node ``torque_estimator``: thin rclpy glue around the ROS-free `TorqueEstimator`.
 
 Callbacks only convert messages to SI floats, call the core, and convert the results back.
-See README, "torque_estimator", for topics, parameters and diagnostics, and "CPU cost" for
-why the node subscribes raw messages, publishes serialised Float64s and keeps its QoS event
-handlers to the one that can fire.
+See README, "torque_estimator", for topics and parameters, docs/monitor.md for diagnostics,
+and docs/cpu_cost.md for why the node subscribes raw messages, publishes serialised Float64s
+and keeps its QoS event handlers to the one that can fire.
 """
 
 from __future__ import annotations
@@ -160,7 +160,7 @@ class TorqueEstimatorNode(Node):
 
         # Every publisher, subscription and QoS event handler is one more entity that rclpy's
         # executor puts into the wait set it rebuilds for every message, which is most of
-        # the node's CPU cost at 1 kHz (README, "CPU cost"). rclpy gives each publisher and
+        # the node's CPU cost at 1 kHz (docs/cpu_cost.md). rclpy gives each publisher and
         # subscription two handlers by default (incompatible QoS, incompatible type).
         # Outputs: none. An incompatible subscriber is told by its own side (rclpy and
         # rclcpp subscriptions warn by default), so ours would only repeat it.

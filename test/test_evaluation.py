@@ -306,7 +306,7 @@ def test_quick_bank_end_to_end(quick, tmp_path):
         assert r.attribution in ('valve_plate', 'other_friction', 'not_friction',
                                  'cannot_tell', 'none')
         assert 0.0 <= r.monitored_fraction <= 1.0 and 0.0 <= r.above_min_speed_fraction <= 1.0
-    # targets of the issue that the quick bank can show (the full bank: README)
+    # targets of the issue that the quick bank can show (the full bank: docs/monitor.md)
     assert fig['false_alarms']['all'] == 0
     assert fig['delay_p90_s']['valve_plate_x1.6']['trapezoid'] < 20.0
     for fault in ('bearing_x1.8', 'joints_x3', 'drive_loss_+0.2nm', 'torque_offset_+0.2nm',

@@ -333,7 +333,7 @@ def test_outputs_offer_the_qos_the_output_bag_records(ros):
 
 
 def test_cpu_benchmark_runs_end_to_end(table_file):
-    """A short run of the benchmark (figures are for the README's longer runs, not tested)."""
+    """A short run of the benchmark (figures are for docs/cpu_cost.md's longer runs: untested)."""
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([str(PARAMS.parents[1]), env.get('PYTHONPATH', '')])
     done = subprocess.run(

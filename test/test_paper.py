@@ -60,7 +60,7 @@ def test_papers_numbers_that_contradict_each_other_are_flagged_with_a_note(check
 
 
 def test_measured_efficiency_at_8000_rpm_stays_out_of_reach_as_documented(checks):
-    """README: the 136-bar, 8,000-rpm point needs more friction than the paper's 300-bar one."""
+    """docs/model.md: 136 bar, 8,000 rpm needs more friction than the paper's 300-bar point."""
     row = checks['input torque vs measured, 136 bar, 8,000 rpm']
     assert not row.holds
     assert -0.15 < row.relative_difference < -0.06
@@ -85,7 +85,7 @@ def test_consistent_set_marks_fit_only_what_it_shares_with_the_fitted_set(consis
 def test_consistent_set_notes_describe_its_own_choices(consistent_checks, consistent_model):
     slide = consistent_checks['max joint sliding speed, 10,000 rpm']
     assert 'flange' in slide.note and not slide.note.startswith('with the joint sliding')
-    # relative to the flange the joint turns at about omega sin(delta) (README), plus the
+    # relative to the flange the joint turns at about omega sin(delta) (docs/model.md), plus the
     # piston's own swing: well above the paper's barrel-relative 0.275 m/s
     g = consistent_model.params.geometry
     floor = 10000 * math.pi / 30 * math.sin(g.inclination_rad) * g.joint_ball_radius_m

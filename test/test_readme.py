@@ -13,11 +13,13 @@
 # limitations under the License.
 
 """
-The README's numbers and tables, checked against what the code prints (issue 11).
+The README's and docs pages' numbers and tables, checked against what the code prints.
 
-Each check parses the README itself, so a figure that drifts from the code fails here
-instead of misleading a reader: the parameters table (made from `config.PARAMETERS`), the
-``pump_friction torque`` example, and the calibration worked example.
+Each check parses the page that shows the figure (issue 11; the README was split into
+``docs/*.md`` in issue 16), so a figure that drifts from the code fails here instead of
+misleading a reader: the parameters table in README.md (made from `config.PARAMETERS`),
+the ``pump_friction torque`` example in any page, and the calibration worked example in
+docs/calibration.md. Every relative link and image of the pages must resolve.
 """
 
 from pathlib import Path
@@ -30,6 +32,9 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 README = (REPO / 'README.md').read_text()
+PAGES = {path: path.read_text() for path in [REPO / 'README.md',
+                                             *sorted((REPO / 'docs').glob('*.md'))]}
+CALIBRATION = (REPO / 'docs' / 'calibration.md').read_text()
 
 
 def _text(value):
@@ -62,8 +67,9 @@ def test_parameters_table_is_the_declared_spec():
 
 
 def console_blocks():
-    """(command, printed lines) of each ``$ pump_friction ...`` in a console block."""
-    blocks = re.findall(r'```console\n(.*?)```', README, flags=re.S)
+    """(command, printed lines) of each ``$ pump_friction ...`` in a console block of any page."""
+    blocks = [block for text in PAGES.values()
+              for block in re.findall(r'```console\n(.*?)```', text, flags=re.S)]
     for block in blocks:
         lines = block.splitlines()
         assert lines[0].startswith('$ pump_friction ')
@@ -78,7 +84,7 @@ def test_torque_example_prints_what_the_readme_shows(capsys):
         assert capsys.readouterr().out.splitlines() == lines
 
 
-def _figures(pattern, text=README):
+def _figures(pattern, text):
     match = re.search(pattern, text, flags=re.S)
     assert match, pattern
     return [float(x) for x in match.groups()]
@@ -86,7 +92,7 @@ def _figures(pattern, text=README):
 
 @pytest.fixture(scope='module')
 def worked_example(tmp_path_factory):
-    """Run the README's worked example in a scratch folder: calibrate, table, replay."""
+    """Run docs/calibration.md's worked example in a scratch folder: calibrate, table, replay."""
     import os
 
     tmp = tmp_path_factory.mktemp('worked')
@@ -111,7 +117,8 @@ def test_calibration_example_figures(worked_example):
     documented = _figures(
         r'valve_plate\.coulomb ([\d.]+) \+-([\d.]+), valve_plate\.viscous ([\d.]+) \+-([\d.]+),'
         r' bearing\.f1 ([\d.]+)\s+#?\s*\+-([\d.]+), bearing\.f0 ([\d.]+) \+-([\d.]+); RMSE '
-        r'([\d.]+) -> ([\d.]+) N m; 5-fold CV ([\d.]+) N m\s+#?\s*\(noise ([\d.]+) N m\)')
+        r'([\d.]+) -> ([\d.]+) N m; 5-fold CV ([\d.]+) N m\s+#?\s*\(noise ([\d.]+) N m\)',
+        CALIBRATION)
     got = []
     for name in ('valve_plate.coulomb', 'valve_plate.viscous', 'bearing.f1', 'bearing.f0'):
         got += [fitted[name].fitted, fitted[name].ci95]
@@ -133,7 +140,7 @@ def test_worked_example_replay_figures(worked_example):
     from pump_friction_ros.estimator import estimator_from_config
 
     _, tmp, _ = worked_example
-    params = tmp / 'out' / 'my_params.yaml'  # as the README's printf writes it, from $PWD
+    params = tmp / 'out' / 'my_params.yaml'  # as the page's printf writes it, from $PWD
     params.write_text('/**/torque_estimator:\n  ros__parameters:\n'
                       f'    pump_file: {tmp}/out/my_pump.yaml\n'
                       f'    table_file: {tmp}/out/my_pump_table.npz\n')
@@ -149,8 +156,34 @@ def test_worked_example_replay_figures(worked_example):
         (np.abs(accel) <= config.monitor_max_accel_rad_s2)
     mean, rest, vp = _figures(r'residual the monitor learns from averages\s+(-[\d.]+) N m.*?'
                               r'other components\s+\(scale ([\d.]+)\) rather than on the '
-                              r'valve plate \(([\d.]+)\)')
+                              r'valve plate \(([\d.]+)\)', CALIBRATION)
     assert np.mean(residual[learnt] * np.sign(speed[learnt])) == pytest.approx(mean, abs=5e-4)
     assert core.monitor.theta_rest == pytest.approx(rest, abs=5e-3)
     assert core.monitor.theta_vp == pytest.approx(vp, abs=5e-3)
     assert not summary.warn_intervals and not summary.error_intervals  # "no alarm"
+
+
+def _anchor(heading):
+    """Return GitHub's anchor of a markdown heading: lower case, punctuation dropped."""
+    text = re.sub(r'[^\w\- ]', '', heading.strip().lower())
+    return text.replace(' ', '-')
+
+
+def _prose(text):
+    return re.sub(r'```.*?```', '', text, flags=re.S)
+
+
+def test_relative_links_resolve():
+    links = 0
+    for page, text in PAGES.items():
+        for target in re.findall(r'\]\(([^)\s]+)\)', _prose(text)):
+            if re.match(r'[a-z]+:', target):
+                continue
+            path, _, anchor = target.partition('#')
+            linked = (page.parent / path).resolve() if path else page
+            assert linked.exists(), (page.name, target)
+            if anchor:
+                headings = re.findall(r'^#+ (.*)$', _prose(PAGES[linked]), flags=re.M)
+                assert anchor in [_anchor(h) for h in headings], (page.name, target)
+            links += 1
+    assert links

@@ -446,12 +446,12 @@ def test_sample_bags_are_reproducible_from_their_seed(tmp_path, monkeypatch_modu
 
 
 def test_shipped_sample_bags_replay_as_documented():
-    """The README's figures for the sample bags, parsed from the README."""
+    """The figures for the sample bags, parsed from their page, docs/replay.md."""
     import re
-    readme = (REPO / 'README.md').read_text()
+    page = (REPO / 'docs' / 'replay.md').read_text()
     figures = re.search(r'the wear bag goes WARN at\s+([\d.]+) s and ERROR at ([\d.]+) s, '
                         r'and ends\s+with the valve-plate scale at ([\d.]+) \+- ([\d.]+) '
-                        r'\(95 %;\s+the simulated truth is ([\d.]+)\)', readme)
+                        r'\(95 %;\s+the simulated truth is ([\d.]+)\)', page)
     warn_s, error_s, final, interval, truth = map(float, figures.groups())
     nominal = replay_bag(REPO / 'bags' / 'eha_nominal', CONFIG)
     wear = replay_bag(REPO / 'bags' / 'eha_valve_plate_wear', CONFIG)
@@ -466,7 +466,7 @@ def test_shipped_sample_bags_replay_as_documented():
     assert truth == 1.6 == samples.WEAR_SCALE  # the wear the sample bag was made with
     assert abs(wear.final_valve_plate_scale - truth) < interval  # the interval holds the truth
     defaults = replay_bag(REPO / 'bags' / 'eha_nominal', EstimatorConfig())
-    assert defaults.error_intervals  # README: without eha_params.yaml even nominal alarms
+    assert defaults.error_intervals  # docs/replay.md: without eha_params.yaml even nominal alarms
     for bag in ('eha_nominal', 'eha_valve_plate_wear'):
         size = sum(f.stat().st_size for f in (REPO / 'bags' / bag).iterdir())
         assert size < 5e6
