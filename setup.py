@@ -55,9 +55,9 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'pump_friction = pump_friction_ros.cli:main',
-            'torque_estimator = pump_friction_ros.node:main',
-            'measure_node_cpu = pump_friction_ros.measure_cpu:main',
+            'pump_friction = pump_friction_ros.app.cli:main',
+            'torque_estimator = pump_friction_ros.node.torque_estimator:main',
+            'measure_node_cpu = pump_friction_ros.node.measure_cpu:main',
         ],
     },
 )

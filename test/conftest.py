@@ -20,8 +20,8 @@ from pathlib import Path
 import shutil
 import tempfile
 
-from pump_friction_ros.model import PumpModel
-from pump_friction_ros.params import load_pump
+from pump_friction_ros.physics.model import PumpModel
+from pump_friction_ros.physics.pump_parameters import load_pump
 import pytest
 
 # The rclpy tests talk DDS: on this machine only, in a domain of this run's own (two runs at

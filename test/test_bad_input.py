@@ -45,7 +45,7 @@ def env(tmp_path_factory):
 
 def cli(env, *argv, cwd=None, timeout=60):
     """Run ``pump_friction`` in a subprocess; a hang fails the test after ``timeout`` s."""
-    return subprocess.run([sys.executable, '-m', 'pump_friction_ros.cli', *map(str, argv)],
+    return subprocess.run([sys.executable, '-m', 'pump_friction_ros.app.cli', *map(str, argv)],
                           capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env,
                           check=False)
 
@@ -397,7 +397,7 @@ def interrupt(env, argv, watch, group=True, cwd=None):
     def as_in_a_terminal():  # a runner in the background starts us with Ctrl-C ignored
         signal.signal(signal.SIGINT, signal.SIG_DFL)
 
-    proc = subprocess.Popen([sys.executable, '-m', 'pump_friction_ros.cli', *map(str, argv)],
+    proc = subprocess.Popen([sys.executable, '-m', 'pump_friction_ros.app.cli', *map(str, argv)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=env, cwd=cwd, start_new_session=True,
                             preexec_fn=as_in_a_terminal)
@@ -552,10 +552,10 @@ def test_a_relative_pump_file_from_another_directory_is_explained(env, tmp_path)
 def test_replay_counts_exactly_what_the_nodes_conversion_counts(tmp_path, env, monkeypatch):
     """Batch decoder + replay vs rosbags messages through the node's own conversion."""
     from pump_friction_ros.bags.replay import replay_bag
-    from pump_friction_ros.config import EstimatorConfig
-    from pump_friction_ros.estimator import estimator_from_config
-    from pump_friction_ros.inputs import INPUTS
-    from pump_friction_ros.ros_messages import input_sample, stamp_to_ns
+    from pump_friction_ros.core.estimator import estimator_from_config
+    from pump_friction_ros.core.inputs import INPUTS
+    from pump_friction_ros.core.node_parameters import EstimatorConfig
+    from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns
     from rosbags.highlevel import AnyReader
 
     monkeypatch.setenv('XDG_CACHE_HOME', env['XDG_CACHE_HOME'])

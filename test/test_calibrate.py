@@ -19,17 +19,17 @@ import math
 from pathlib import Path
 
 import numpy as np
+from pump_friction_ros.app.cli import main
 from pump_friction_ros.calibration import (
     calibrate,
     CalibrationError,
     correlation_time,
     fitted_pump,
 )
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import load_estimator_config
-from pump_friction_ros.model import PumpModel
-from pump_friction_ros.params import load_pump
-from pump_friction_ros.table_io import cached_table
+from pump_friction_ros.core.node_parameters import load_estimator_config
+from pump_friction_ros.physics.model import PumpModel
+from pump_friction_ros.physics.pump_parameters import load_pump
+from pump_friction_ros.table.table_files import cached_table
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -150,7 +150,7 @@ def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_pat
     assert sorted(p.name for p in (tmp_path / 'report').glob('*.png')) == [
         'residual.png', 'torque_vs_pressure.png', 'torque_vs_speed.png']
     from pump_friction_ros.bags.replay import replay_bag
-    from pump_friction_ros.config import EstimatorConfig
+    from pump_friction_ros.core.node_parameters import EstimatorConfig
     summary = replay_bag(REPO / 'bags' / 'eha_nominal',
                          EstimatorConfig(pump_file=str(out), oil_viscosity_m2_s=46e-6))
     assert summary.estimates == 75000

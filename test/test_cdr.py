@@ -31,9 +31,9 @@ try:
 except ImportError:  # the property tests skip; the hand-made cases below still run
     given = None
 
-from pump_friction_ros.bags.cdr import joint_layout, TopicDecoder  # noqa: I100 (after try)
-from pump_friction_ros.inputs import Defect, InputKind, INPUTS
-from pump_friction_ros.ros_messages import input_sample, stamp_to_ns
+from pump_friction_ros.core.inputs import Defect, InputKind, INPUTS  # noqa: I100 (after try)
+from pump_friction_ros.messages.cdr import joint_layout, TopicDecoder
+from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns
 
 STORE = get_typestore(Stores.ROS2_JAZZY) if 'get_typestore' in globals() else None
 T = STORE.types if STORE is not None else {}

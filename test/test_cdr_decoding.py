@@ -25,12 +25,12 @@ try:
 except ImportError:  # a ROS shell without pip's rosbags: skip, do not break collection
     pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
-from pump_friction_ros.bags.cdr import TopicDecoder  # noqa: I100 (after try)
-from pump_friction_ros.bags.cdr_message import MessageDecoder
-from pump_friction_ros.config import EstimatorConfig
-from pump_friction_ros.inputs import Defect, InputKind, INPUTS
-from pump_friction_ros.ros_messages import float64_cdr, input_sample, stamp_to_ns
-from pump_friction_ros.samples import make_sample_bags
+from pump_friction_ros.core.inputs import Defect, InputKind, INPUTS  # noqa: I100 (after try)
+from pump_friction_ros.core.node_parameters import EstimatorConfig
+from pump_friction_ros.messages.cdr import TopicDecoder
+from pump_friction_ros.messages.cdr_message import MessageDecoder
+from pump_friction_ros.messages.conversions import float64_cdr, input_sample, stamp_to_ns
+from pump_friction_ros.sim.sample_bags import make_sample_bags
 
 STORE = get_typestore(Stores.ROS2_JAZZY) if 'get_typestore' in globals() else None
 T = STORE.types if STORE is not None else {}

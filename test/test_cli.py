@@ -19,7 +19,7 @@ import math
 from pathlib import Path
 import struct
 
-from pump_friction_ros.cli import main
+from pump_friction_ros.app.cli import main
 import pytest
 
 TORQUE_KEYS = ['theoretical_nm', 'valve_plate_nm', 'bearing_nm', 'spherical_joints_nm',
@@ -118,7 +118,7 @@ def test_bad_arguments_exit_2_with_one_line_and_no_traceback(capsys, argv):
 
 
 def test_every_parser_refuses_abbreviations():
-    from pump_friction_ros.cli import build_parser
+    from pump_friction_ros.app.cli import build_parser
     parser = build_parser()
     subs = next(a for a in parser._actions if a.dest == 'command').choices
     assert parser.allow_abbrev is False

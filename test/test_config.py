@@ -21,7 +21,7 @@ from pathlib import Path
 import re
 
 import numpy as np
-from pump_friction_ros.config import (
+from pump_friction_ros.core.node_parameters import (
     config_from_mapping,
     EstimatorConfig,
     load_estimator_config,

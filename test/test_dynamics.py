@@ -17,9 +17,9 @@
 import dataclasses
 
 import numpy as np
-from pump_friction_ros.dynamics import joint_angular_velocity_per_speed, solve_piston_loads
-from pump_friction_ros.params import Curve
-from pump_friction_ros.pressure import chamber_pressure
+from pump_friction_ros.physics.dynamics import joint_angular_velocity_per_speed, solve_piston_loads
+from pump_friction_ros.physics.pressure import chamber_pressure
+from pump_friction_ros.physics.pump_parameters import Curve
 import pytest
 
 AREA = np.pi / 4 * 9.5e-3**2  # Table 1 bore

@@ -23,10 +23,10 @@ import sys
 import types
 
 from pump_friction_ros import errors
+from pump_friction_ros.app.cli import main
 from pump_friction_ros.bags import sources
 from pump_friction_ros.bags.fleet import ReplayJob, run_jobs
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import EstimatorConfig
+from pump_friction_ros.core.node_parameters import EstimatorConfig
 from pump_friction_ros.errors import BagError, PumpFrictionError
 import pytest
 
@@ -130,5 +130,5 @@ def test_usage_errors_are_the_errors_module_class_and_print_one_line(argv, messa
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith('pump_friction: error: ') and message in err and err.count('\n') == 1
-    from pump_friction_ros import cli
+    from pump_friction_ros.app import cli
     assert cli.UsageError is errors.UsageError

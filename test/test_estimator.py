@@ -18,16 +18,36 @@ import itertools
 import math
 
 import numpy as np
-from pump_friction_ros.config import EstimatorConfig
-from pump_friction_ros.estimator import COUNTERS, TorqueEstimator
-from pump_friction_ros.inputs import InputKind as K
-from pump_friction_ros.monitor import ERROR, OK, STALE, WARN
-from pump_friction_ros.oil import WaltherViscosity
-from pump_friction_ros.simulate import DutyCycle, feed, simulate_duty_cycle, wear_step
-from pump_friction_ros.table import build_table
+from pump_friction_ros.core.estimator import COUNTERS, TorqueEstimator
+from pump_friction_ros.core.inputs import InputKind as K
+from pump_friction_ros.core.monitor import ERROR, OK, STALE, WARN
+from pump_friction_ros.core.node_parameters import EstimatorConfig
+from pump_friction_ros.physics.oil import WaltherViscosity
+from pump_friction_ros.sim.duty_cycle import DutyCycle, simulate_duty_cycle, wear_step
+from pump_friction_ros.table.friction_table import build_table
 import pytest
 
 NS = 1_000_000_000
+
+
+def feed(estimator, run):
+    """Feed a simulated run through `on_input` in time order, as the node would see it."""
+    t_joint = np.round(run.t_s * 1e9).astype(np.int64)
+    t_press = np.round(run.pressure_t_s * 1e9).astype(np.int64)
+    events = sorted([(t, 0, k) for k, t in enumerate(t_press.tolist())]
+                    + [(t, 1, k) for k, t in enumerate(t_joint.tolist())])  # pressure first
+    out = []
+    for stamp, is_joint, k in events:
+        if is_joint:
+            est = estimator.on_input(K.JOINT_STATE, stamp, float(run.speed_rad_s[k]),
+                                     float(run.torque_nm[k]))
+            if est is not None:
+                out.append(est)
+        else:
+            estimator.on_input(K.LOAD_PRESSURE, stamp, float(run.pressure_diff_pa[k]))
+    return out
+
+
 CONFIG = EstimatorConfig(oil_viscosity_m2_s=46e-6, drive_loss_torque_nm=0.05)
 
 
@@ -286,7 +306,7 @@ def test_a_stamp_far_ahead_of_its_receive_time_is_rejected_and_loses_nothing(tab
 def test_nanosec_all_ones_reads_as_four_seconds_ahead():
     from types import SimpleNamespace
 
-    from pump_friction_ros.ros_messages import stamp_to_ns
+    from pump_friction_ros.messages.conversions import stamp_to_ns
     stamp = SimpleNamespace(sec=T0 // NS, nanosec=0xFFFFFFFF)
     assert stamp_to_ns(stamp) - T0 == 4_294_967_295  # > max_stamp_lead_s (1 s): rejected
 
@@ -327,7 +347,7 @@ def test_a_clock_restart_backwards_restarts_the_speed_filter_cleanly(table):
 
 
 def test_speed_filter_restarts_on_a_negative_step():
-    from pump_friction_ros.speed_filter import SpeedFilter
+    from pump_friction_ros.core.speed_filter import SpeedFilter
     f = SpeedFilter(0.01, 50_000_000)
     for k in range(100):
         f.update(10 * NS + k * 1_000_000, 100.0 + 0.5 * k)  # 500 rad/s^2

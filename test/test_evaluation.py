@@ -21,8 +21,9 @@ import math
 from pathlib import Path
 
 import numpy as np
-from pump_friction_ros.cli import main
-from pump_friction_ros.estimator import TorqueEstimator
+from pump_friction_ros.app.cli import main
+from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.monitor import OK
 from pump_friction_ros.evaluation.bank import (
     base_config,
     build_scenarios,
@@ -48,11 +49,10 @@ from pump_friction_ros.evaluation.settings import (
     FAULTS,
     QUICK,
 )
-from pump_friction_ros.model import COMPONENTS
-from pump_friction_ros.monitor import OK
-from pump_friction_ros.oil import WaltherViscosity
-from pump_friction_ros.params import load_pump
-from pump_friction_ros.table_io import cached_table
+from pump_friction_ros.physics.model import COMPONENTS
+from pump_friction_ros.physics.oil import WaltherViscosity
+from pump_friction_ros.physics.pump_parameters import load_pump
+from pump_friction_ros.table.table_files import cached_table
 import pytest
 
 FAMILY = {f.name: f for f in FAMILIES}

@@ -18,13 +18,13 @@ import dataclasses
 import math
 
 import numpy as np
-from pump_friction_ros.friction import (
+from pump_friction_ros.physics.friction import (
     bearing_torque_nm,
     couette_land_integral_m4,
     smooth_sign,
     valve_plate_viscous_torque_nm,
 )
-from pump_friction_ros.params import barrel_effective_area_m2
+from pump_friction_ros.physics.pump_parameters import barrel_effective_area_m2
 import pytest
 
 

@@ -42,9 +42,9 @@ from pump_friction_ros.bags import fleet, reader, replay, sinks, sources  # noqa
 from pump_friction_ros.bags.fleet import ReplayJob, run_jobs
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.bags.sources import ProcessSource
-from pump_friction_ros.config import EstimatorConfig
+from pump_friction_ros.core.node_parameters import EstimatorConfig
 from pump_friction_ros.errors import BagError, OutputError
-from pump_friction_ros.samples import make_sample_bags
+from pump_friction_ros.sim.sample_bags import make_sample_bags
 
 if not sys.platform.startswith('linux'):
     pytestmark = pytest.mark.skip(reason='pipe and signal details checked on Linux')

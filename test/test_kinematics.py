@@ -15,7 +15,7 @@
 """Kinematics (eqs. 1, 2, 8) against the geometry's closed forms and numerical derivatives."""
 
 import numpy as np
-from pump_friction_ros.kinematics import head_position, joint_position, piston_kinematics
+from pump_friction_ros.physics.kinematics import head_position, joint_position, piston_kinematics
 import pytest
 
 # Fig. 2(a) / Table 1, typed in from the paper (not read from the code's parameter file)

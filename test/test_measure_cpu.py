@@ -18,7 +18,7 @@ import os
 import sys
 import time
 
-from pump_friction_ros.measure_cpu import (
+from pump_friction_ros.node.measure_cpu import (
     cpu_seconds,
     format_run,
     format_summary,

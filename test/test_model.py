@@ -17,10 +17,10 @@
 import math
 
 import numpy as np
-from pump_friction_ros.dynamics import solve_piston_loads
-from pump_friction_ros.kinematics import piston_kinematics
-from pump_friction_ros.model import COMPONENTS, PumpModel
-from pump_friction_ros.pressure import chamber_pressure
+from pump_friction_ros.physics.dynamics import solve_piston_loads
+from pump_friction_ros.physics.kinematics import piston_kinematics
+from pump_friction_ros.physics.model import COMPONENTS, PumpModel
+from pump_friction_ros.physics.pressure import chamber_pressure
 import pytest
 
 RPM = math.pi / 30
@@ -194,7 +194,7 @@ def pump_with(paper_raw, n, bore_pitch_radius_m=None, bore_diameter_m=None,
     """
     import copy
 
-    from pump_friction_ros.params import pump_from_mapping
+    from pump_friction_ros.physics.pump_parameters import pump_from_mapping
 
     raw = copy.deepcopy(paper_raw)
     g = raw['geometry']
@@ -266,6 +266,6 @@ def test_nine_pistons_of_the_same_displacement_give_less_ripple_same_torque(pape
 
 
 def test_angle_grid_is_a_multiple_of_the_piston_count():
-    from pump_friction_ros.model import angle_count
+    from pump_friction_ros.physics.model import angle_count
     assert [angle_count(n) for n in (3, 5, 7, 9, 11, 100)] == [360, 360, 364, 360, 363, 400]
     assert angle_count(7, 180) == 182  # the table's coarser grid

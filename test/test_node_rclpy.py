@@ -33,15 +33,19 @@ rclpy = pytest.importorskip(
 # them with 'import pytest' across the code in between, hence I100.
 from builtin_interfaces.msg import Time  # noqa: E402, I100
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
-from pump_friction_ros.bags.cdr_message import MessageDecoder  # noqa: E402
 from pump_friction_ros.bags.sinks import output_qos, output_topics  # noqa: E402
-from pump_friction_ros.config import load_estimator_config  # noqa: E402
+from pump_friction_ros.core.inputs import Defect, InputKind, INPUTS  # noqa: E402
+from pump_friction_ros.core.node_parameters import load_estimator_config  # noqa: E402
 from pump_friction_ros.errors import PumpFrictionError  # noqa: E402
-from pump_friction_ros.inputs import Defect, InputKind, INPUTS  # noqa: E402
-from pump_friction_ros.model import PumpModel  # noqa: E402
-from pump_friction_ros.node import TorqueEstimatorNode  # noqa: E402
-from pump_friction_ros.ros_messages import input_sample, level_from_msg, stamp_to_ns  # noqa: E402
-from pump_friction_ros.table import build_table  # noqa: E402
+from pump_friction_ros.messages.cdr_message import MessageDecoder  # noqa: E402
+from pump_friction_ros.messages.conversions import (  # noqa: E402
+    input_sample,
+    level_from_msg,
+    stamp_to_ns,
+)
+from pump_friction_ros.node.torque_estimator import TorqueEstimatorNode  # noqa: E402
+from pump_friction_ros.physics.model import PumpModel  # noqa: E402
+from pump_friction_ros.table.friction_table import build_table  # noqa: E402
 from rclpy.event_handler import QoSSubscriptionEventType  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
@@ -337,7 +341,7 @@ def test_cpu_benchmark_runs_end_to_end(table_file):
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join([str(PARAMS.parents[1]), env.get('PYTHONPATH', '')])
     done = subprocess.run(
-        [sys.executable, '-m', 'pump_friction_ros.measure_cpu', '--qos', 'reliable', '--runs',
+        [sys.executable, '-m', 'pump_friction_ros.node.measure_cpu', '--qos', 'reliable', '--runs',
          '1', '--window-s', '2', '--settle-s', '0.5', '--start-timeout-s', '60',
          '--estimator-param', f'table_file:={table_file}'],
         env=env, capture_output=True, text=True, timeout=180)

@@ -25,7 +25,7 @@ import subprocess
 import sys
 import time
 
-from pump_friction_ros.table import build_table
+from pump_friction_ros.table.friction_table import build_table
 import pytest
 
 pytest.importorskip('rclpy', reason='rclpy is not importable: install the Jazzy wheels '
@@ -46,8 +46,8 @@ def start_node(table_file, tmp_path):
                ROS_LOG_DIR=str(tmp_path / 'log'))
     env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
     proc = subprocess.Popen(
-        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
-         str(PARAMS), '-p', f'table_file:={table_file}'],
+        [sys.executable, '-m', 'pump_friction_ros.node.torque_estimator', '--ros-args',
+         '--params-file', str(PARAMS), '-p', f'table_file:={table_file}'],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
     seen = b''
     end = time.monotonic() + 60.0

@@ -25,15 +25,15 @@ try:
 except ImportError:  # a ROS shell without pip's rosbags
     pytestmark = pytest.mark.skip(reason='rosbags is not installed (pip install rosbags)')
 
-from pump_friction_ros.bags.reader import BagMeta, mcap_chunk_compression  # noqa: I100
+from pump_friction_ros.app.cli import main  # noqa: I100 (after try)
+from pump_friction_ros.bags.reader import BagMeta, mcap_chunk_compression
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.bags.sinks import output_compression
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import EstimatorConfig
-from pump_friction_ros.estimator import TorqueEstimator
-from pump_friction_ros.samples import write_run
-from pump_friction_ros.simulate import DutyCycle, simulate_duty_cycle
-from pump_friction_ros.table import build_table
+from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.node_parameters import EstimatorConfig
+from pump_friction_ros.sim.duty_cycle import DutyCycle, simulate_duty_cycle
+from pump_friction_ros.sim.sample_bags import write_run
+from pump_friction_ros.table.friction_table import build_table
 
 CONFIG = EstimatorConfig()
 

@@ -16,7 +16,7 @@
 
 import math
 
-from pump_friction_ros.paper import paper_checks
+from pump_friction_ros.physics.paper import paper_checks
 import pytest
 
 

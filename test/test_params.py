@@ -17,7 +17,7 @@
 import copy
 
 from pump_friction_ros.errors import ConfigError
-from pump_friction_ros.params import load_pump, pump_from_mapping
+from pump_friction_ros.physics.pump_parameters import load_pump, pump_from_mapping
 import pytest
 import yaml
 

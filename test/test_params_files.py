@@ -24,11 +24,15 @@ the sample bags' simulated pump lives in ``bags/eha_params.yaml``.
 import argparse
 from pathlib import Path
 
-from pump_friction_ros.config import EstimatorConfig, load_estimator_config, PARAMETERS
+from pump_friction_ros.core.node_parameters import (
+    EstimatorConfig,
+    load_estimator_config,
+    PARAMETERS,
+)
 from pump_friction_ros.errors import ConfigError
 from pump_friction_ros.paths import config_dir
-from pump_friction_ros.samples import sample_params_text
-from pump_friction_ros.simulate import DutyCycle
+from pump_friction_ros.sim.duty_cycle import DutyCycle
+from pump_friction_ros.sim.sample_bags import sample_params_text
 import pytest
 import yaml
 
@@ -51,7 +55,7 @@ def test_shipped_params_file_declared_defaults_and_replay_defaults_agree():
         value = getattr(defaults, spec.name)  # ... and what the replay starts from
         assert (value.value if spec.enum else value) == spec.default, spec.name
     assert load_estimator_config(SHIPPED) == defaults
-    from pump_friction_ros.cli_data import estimator_config
+    from pump_friction_ros.app.data_commands import estimator_config
     assert estimator_config(argparse.Namespace(params=None)) == defaults  # replay, no flag
 
 
@@ -106,7 +110,7 @@ def test_relative_pump_file_resolves_against_the_current_directory_and_says_so(
 def test_pump_file_may_name_a_shipped_set_or_a_package_path(tmp_path, value):
     config = load_estimator_config(params_file(tmp_path / 'p.yaml', pump_file=value))
     assert config.pump_file == str(config_dir() / 'pumps' / 'hong_doh_2004_consistent.yaml')
-    from pump_friction_ros.params import load_pump
+    from pump_friction_ros.physics.pump_parameters import load_pump
     assert load_pump(value).name == 'hong_doh_2004_consistent'
 
 
@@ -125,7 +129,7 @@ def test_bad_pump_file_values_are_named(tmp_path, value, message):
 def test_the_nodes_file_parameters_resolve_against_its_directory_and_say_so(tmp_path,
                                                                             monkeypatch):
     """What TorqueEstimatorNode does with its declared values (no rclpy needed)."""
-    from pump_friction_ros.config import config_from_mapping
+    from pump_friction_ros.core.node_parameters import config_from_mapping
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ConfigError) as info:
         config_from_mapping({'pump_file': 'out/my_pump.yaml'}, 'parameter ',
@@ -140,7 +144,7 @@ def test_the_nodes_file_parameters_resolve_against_its_directory_and_say_so(tmp_
 def test_the_issues_partial_params_file_on_the_healthy_sample_bag_raises_no_alarm(
         tmp_path, capsys):
     """The issue's exact mistake: a one-parameter file; the bag's own parameters still hold."""
-    from pump_friction_ros.cli import main
+    from pump_friction_ros.app.cli import main
     one = tmp_path / 'one.yaml'
     one.write_text('/**/torque_estimator:\n  ros__parameters:\n    hardware_id: pump_7\n')
     assert main(['replay', str(REPO / 'bags' / 'eha_nominal'), '--params', str(one),

@@ -26,8 +26,8 @@ from pathlib import Path
 import re
 import shlex
 
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import PARAMETERS
+from pump_friction_ros.app.cli import main
+from pump_friction_ros.core.node_parameters import PARAMETERS
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -136,8 +136,8 @@ def _decimals(number):
 def test_worked_example_replay_figures(worked_example):
     import numpy as np
     from pump_friction_ros.bags.replay import replay_bag
-    from pump_friction_ros.config import load_estimator_config
-    from pump_friction_ros.estimator import estimator_from_config
+    from pump_friction_ros.core.estimator import estimator_from_config
+    from pump_friction_ros.core.node_parameters import load_estimator_config
 
     _, tmp, _ = worked_example
     params = tmp / 'out' / 'my_params.yaml'  # as the page's printf writes it, from $PWD

@@ -23,14 +23,15 @@ from pathlib import Path
 import shutil
 
 import numpy as np
-from pump_friction_ros import samples
+from pump_friction_ros.app.cli import main
 from pump_friction_ros.bags import reader as bag_reader
 from pump_friction_ros.bags.fleet import discover_bags, ReplayJob, run_jobs
 from pump_friction_ros.bags.outputs import CSV_COLUMNS
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.bags.sinks import float64_cdr
-from pump_friction_ros.cli import main
-from pump_friction_ros.config import (
+from pump_friction_ros.core.estimator import Estimate, TorqueEstimator
+from pump_friction_ros.core.inputs import Defect, InputKind, inputs_for
+from pump_friction_ros.core.node_parameters import (
     EstimatorConfig,
     load_estimator_config,
     PressureSource,
@@ -39,12 +40,10 @@ from pump_friction_ros.config import (
     ViscositySource,
 )
 from pump_friction_ros.errors import BagError, OutputError
-from pump_friction_ros.estimator import Estimate, TorqueEstimator
-from pump_friction_ros.inputs import Defect, InputKind, inputs_for
-from pump_friction_ros.ros_messages import input_sample, stamp_to_ns
-from pump_friction_ros.samples import make_sample_bags, write_run
-from pump_friction_ros.simulate import DutyCycle, simulate_duty_cycle
-from pump_friction_ros.table import build_table
+from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns
+from pump_friction_ros.sim.duty_cycle import DutyCycle, simulate_duty_cycle
+from pump_friction_ros.sim.sample_bags import make_sample_bags, WEAR_SCALE, write_run
+from pump_friction_ros.table.friction_table import build_table
 import pytest
 
 try:
@@ -463,7 +462,7 @@ def test_shipped_sample_bags_replay_as_documented():
     assert wear.error_intervals[0][0] == pytest.approx(error_s, abs=0.05)
     assert wear.final_valve_plate_scale == pytest.approx(final, abs=5e-4)
     assert 1.96 * wear.final_valve_plate_scale_std == pytest.approx(interval, abs=5e-4)
-    assert truth == 1.6 == samples.WEAR_SCALE  # the wear the sample bag was made with
+    assert truth == 1.6 == WEAR_SCALE  # the wear the sample bag was made with
     assert abs(wear.final_valve_plate_scale - truth) < interval  # the interval holds the truth
     defaults = replay_bag(REPO / 'bags' / 'eha_nominal', EstimatorConfig())
     assert defaults.error_intervals  # docs/replay.md: without eha_params.yaml even nominal alarms

@@ -18,10 +18,10 @@ import math
 from types import SimpleNamespace
 
 import numpy as np
-from pump_friction_ros.config import EstimatorConfig
-from pump_friction_ros.estimator import TorqueEstimator
-from pump_friction_ros.inputs import Defect, InputKind
-from pump_friction_ros.ros_messages import (
+from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.inputs import Defect, InputKind
+from pump_friction_ros.core.node_parameters import EstimatorConfig
+from pump_friction_ros.messages.conversions import (
     diagnostic_array,
     float64_cdr,
     joint_sample,
@@ -32,7 +32,7 @@ from pump_friction_ros.ros_messages import (
     stamp_msg,
     stamp_to_ns,
 )
-from pump_friction_ros.table import build_table
+from pump_friction_ros.table.friction_table import build_table
 import pytest
 
 try:

@@ -15,7 +15,7 @@
 """The speed filter: scalar and array forms agree; a ramp lags by tau per stage, exactly."""
 
 import numpy as np
-from pump_friction_ros.speed_filter import filter_two_stage, SpeedFilter
+from pump_friction_ros.core.speed_filter import filter_two_stage, SpeedFilter
 import pytest
 
 NS = 1_000_000_000

@@ -18,10 +18,10 @@ import json
 import math
 
 import numpy as np
-from pump_friction_ros import table as tb
 from pump_friction_ros.errors import TableError
-from pump_friction_ros.model import COMPONENTS, PumpModel
-from pump_friction_ros.table import (
+from pump_friction_ros.physics.model import COMPONENTS, PumpModel
+from pump_friction_ros.table import friction_table as tb
+from pump_friction_ros.table.friction_table import (
     build_table,
     NOT_FINITE,
     PRESSURE_CLAMPED,
@@ -29,7 +29,7 @@ from pump_friction_ros.table import (
     TableSpec,
     VISCOSITY_CLAMPED,
 )
-from pump_friction_ros.table_io import cached_table, load_table
+from pump_friction_ros.table.table_files import cached_table, load_table
 import pytest
 from scipy.interpolate import RegularGridInterpolator
 

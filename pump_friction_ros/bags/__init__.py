@@ -12,4 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Bags: reading the node's inputs, replaying them through the core, outputs and fleets."""
+"""
+Bags: reading the node's inputs, replaying them through the core, outputs and fleets.
+
+May import: messages, core, table, physics, base.
+"""

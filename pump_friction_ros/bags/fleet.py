@@ -45,9 +45,9 @@ from typing import Any, cast
 
 from .replay import replay_bag, ReplaySummary
 from .sources import stop_process
-from ..config import EstimatorConfig
+from ..core.monitor import LEVEL_NAMES
+from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
-from ..monitor import LEVEL_NAMES
 from ..staging import remove_empty_folders, sigint_held
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',

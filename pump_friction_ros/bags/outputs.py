@@ -21,8 +21,8 @@ so a failed or interrupted replay leaves nothing that looks complete.
 
 from __future__ import annotations
 
-from ..estimate import Estimate
-from ..model import COMPONENTS
+from ..core.estimate_record import Estimate
+from ..physics.model import COMPONENTS
 from ..staging import Staged
 
 __all__ = ['CSV_COLUMNS', 'Staged', 'csv_row']

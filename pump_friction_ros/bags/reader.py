@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from .cdr import TopicDecoder
-from ..config import EstimatorConfig
+from ..core.inputs import inputs_for, InputSpec
+from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError
-from ..inputs import inputs_for, InputSpec
+from ..messages.cdr import TopicDecoder
 
 __all__ = ['BagInputs', 'BagMeta', 'Chunk', 'ReadStats', 'input_topics', 'mcap_chunk_compression',
            'one_line', 'parse_remaps']

@@ -48,15 +48,15 @@ from .sinks import (
     Sink,
 )
 from .sources import open_source, ProcessSource, Source
-from ..config import EstimatorConfig, NODE_NAME
-from ..diagnostics import level_message
+from ..core.diagnostics import level_message
+from ..core.estimate_record import COUNTERS, Estimate
+from ..core.estimator import estimator_from_config, TorqueEstimator
+from ..core.monitor import ERROR, WARN
+from ..core.node_parameters import EstimatorConfig, NODE_NAME
 from ..errors import BagError
-from ..estimate import COUNTERS, Estimate
-from ..estimator import estimator_from_config, TorqueEstimator
-from ..model import efficiency_of
-from ..monitor import ERROR, WARN
+from ..messages.conversions import diagnostic_array, outputs_of, rosbags_types
+from ..physics.model import efficiency_of
 from ..progress import ProgressBar
-from ..ros_messages import diagnostic_array, outputs_of, rosbags_types
 from ..staging import looks_like_bag, looks_like_plots, sigint_held, Staged, StagedOutputs
 
 __all__ = ['CSV_COLUMNS', 'ReplayEvent', 'ReplaySummary', 'bag_estimates', 'replay_bag',
@@ -376,7 +376,7 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
             sink.close()
             sink = None
         if figs is not None:
-            from ..plots import write_replay_figures
+            from .replay_figures import write_replay_figures
             write_replay_figures(series.data, figs.path, Path(bag).name, config)
         staged.commit()
         for item, kind in ((out, 'bag'), (table, 'csv'), (figs, 'plots')):

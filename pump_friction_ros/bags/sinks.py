@@ -28,9 +28,14 @@ from typing import Any, Protocol
 
 from .reader import BagMeta
 from .sources import child_signals, start_helper, stop_process
-from ..config import NODE_NAME
+from ..core.node_parameters import NODE_NAME
 from ..errors import BagError
-from ..ros_messages import DIAGNOSTICS_QOS_DEPTH, float64_cdr, OUTPUT_QOS_DEPTH, OUTPUT_TOPICS
+from ..messages.conversions import (
+    DIAGNOSTICS_QOS_DEPTH,
+    float64_cdr,
+    OUTPUT_QOS_DEPTH,
+    OUTPUT_TOPICS,
+)
 
 __all__ = ['COMPRESSION_CHOICES', 'DIAGNOSTICS_INDEX', 'OUTPUT_INDEX', 'InlineSink',
            'ProcessSink', 'Sink', 'float64_cdr', 'open_sink', 'output_compression',

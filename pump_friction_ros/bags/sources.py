@@ -30,7 +30,7 @@ import signal
 from typing import Any, Protocol
 
 from .reader import BagInputs, BagMeta, Chunk, ReadStats
-from ..config import EstimatorConfig
+from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError
 from ..staging import sigint_held
 

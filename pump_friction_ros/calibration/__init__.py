@@ -28,6 +28,8 @@ fit repeated.
 Modules: `data` (bench CSV and bag samples), `fit` (regression, identifiability,
 cross-validation, inertia), `report` (result, pump file, report folder) and `pipeline`
 (`calibrate`, which runs them in turn).
+
+May import: bags, messages, core, table, physics, base.
 """
 
 from .data import load_bag_samples, load_bench_csv, Samples

@@ -29,12 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from ..config import EstimatorConfig
+from ..core.estimator import TEMPERATURE_RANGE_C
+from ..core.node_parameters import EstimatorConfig
 from ..errors import CalibrationError, quote
-from ..estimator import TEMPERATURE_RANGE_C
-from ..oil import WaltherViscosity
-from ..table import FrictionTable
-from ..units import BAR_TO_PA, cst_to_m2_s, RPM_TO_RAD_S
+from ..physics.oil import WaltherViscosity
+from ..physics.units import BAR_TO_PA, cst_to_m2_s, RPM_TO_RAD_S
+from ..table.friction_table import FrictionTable
 
 __all__ = ['BAG_COLUMNS', 'MIN_SPEED_RAD_S', 'Samples', 'bag_estimates', 'load_bag_samples',
            'load_bench_csv', 'merge_samples', 'timeline_samples']
@@ -238,7 +238,7 @@ def bag_estimates(path: str | Path, config: EstimatorConfig, table: FrictionTabl
 
     """
     from ..bags.replay import bag_estimates
-    from ..estimator import TorqueEstimator
+    from ..core.estimator import TorqueEstimator
 
     core = TorqueEstimator(config, table, default_viscosity_m2_s, 'calibration')
     columns: dict[str, list[float]] = {name: [] for name in BAG_COLUMNS}

@@ -34,11 +34,11 @@ import math
 import numpy as np
 
 from .data import Samples, timeline_samples
-from ..friction import bearing_torque_nm, smooth_sign, valve_plate_viscous_torque_nm
-from ..model import COMPONENTS, input_torque_nm, PumpModel, theoretical_torque_nm
-from ..params import Curve, PumpParams
-from ..speed_filter import filter_two_stage
-from ..table import FrictionTable
+from ..core.speed_filter import filter_two_stage
+from ..physics.friction import bearing_torque_nm, smooth_sign, valve_plate_viscous_torque_nm
+from ..physics.model import COMPONENTS, input_torque_nm, PumpModel, theoretical_torque_nm
+from ..physics.pump_parameters import Curve, PumpParams
+from ..table.friction_table import FrictionTable
 
 __all__ = ['FIT_PARAMETERS', 'INDEX', 'K_FOLDS', 'NAMES', 'FitParameter', 'IdentifiedFit',
            'correlation_time', 'cross_validate', 'fit_identifiable', 'fit_inertia',

@@ -49,14 +49,14 @@ from .report import (
     write_pump_file,
     write_report,
 )
-from ..config import EstimatorConfig
+from ..core.node_parameters import EstimatorConfig
 from ..errors import CalibrationError
-from ..model import theoretical_torque_nm
-from ..oil import WaltherViscosity
-from ..params import load_pump
 from ..paths import resolve_path
+from ..physics.model import theoretical_torque_nm
+from ..physics.oil import WaltherViscosity
+from ..physics.pump_parameters import load_pump
 from ..staging import Staged, StagedOutputs
-from ..table import build_table
+from ..table.friction_table import build_table
 
 __all__ = ['calibrate']
 

@@ -34,8 +34,8 @@ from .data import Samples
 from .fit import K_FOLDS
 from .. import __version__
 from ..errors import CalibrationError
-from ..params import load_pump, PumpParams
-from ..units import pa_to_bar, rad_s_to_rpm
+from ..physics.pump_parameters import load_pump, PumpParams
+from ..physics.units import pa_to_bar, rad_s_to_rpm
 
 if TYPE_CHECKING:
     from ruamel.yaml import YAML
@@ -267,7 +267,7 @@ def write_report(out_dir: Path, result: CalibrationResult, samples: Samples,
         Torque predicted by the base and by the fitted pump [N m].
 
     """
-    from ..plots import _pyplot
+    from ..plotting import pyplot
 
     payload = {'points': result.points, 'selection': result.selection,
                'rmse_before_nm': result.rmse_before_nm, 'rmse_after_nm': result.rmse_after_nm,
@@ -277,7 +277,7 @@ def write_report(out_dir: Path, result: CalibrationResult, samples: Samples,
                'parameters': [dataclasses.asdict(p) for p in result.parameters]}
     (out_dir / 'report.json').write_text(json.dumps(payload, indent=2, default=float))
     (out_dir / 'report.txt').write_text(result.formatted() + '\n')
-    plt = _pyplot()
+    plt = pyplot()
     rpm = rad_s_to_rpm(samples.speed)
     bar = pa_to_bar(samples.dp)
     step = max(1, samples.speed.size // 20000)  # plot at most ~20k points

@@ -18,6 +18,8 @@ Evaluation bank of the wear monitor: scenarios, runs through the core, figures, 
 ``pump_friction evaluate-monitor`` runs it; `run_bank` and `bank_figures` are the API.
 Imports flow settings -> scenarios -> bank -> report / plots -> command; nothing here
 imports ROS.
+
+May import: sim, core, table, physics, base.
 """
 
 from .bank import BankResult, MonitorReading, read_monitor, run_bank, RunRecord

@@ -39,15 +39,15 @@ import numpy as np
 
 from .scenarios import Scenario, simulate_scenario, SimulatedScenario
 from .settings import BankSettings, FAMILIES, FAULTS
-from ..attribution import Verdict
-from ..config import EstimatorConfig, load_estimator_config
-from ..estimator import TorqueEstimator
-from ..inputs import InputKind
-from ..monitor import OK
-from ..params import load_pump, PumpParams
+from ..core.attribution import Verdict
+from ..core.estimator import TorqueEstimator
+from ..core.inputs import InputKind
+from ..core.monitor import OK
+from ..core.node_parameters import EstimatorConfig, load_estimator_config
 from ..paths import config_dir
-from ..table import FrictionTable
-from ..table_io import cached_table
+from ..physics.pump_parameters import load_pump, PumpParams
+from ..table.friction_table import FrictionTable
+from ..table.table_files import cached_table
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'build_scenarios',
            'read_monitor', 'run_bank', 'run_scenario']

@@ -25,7 +25,7 @@ import numpy as np
 
 from .bank import RunRecord
 from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
-from ..plots import _pyplot
+from ..plotting import pyplot
 
 __all__ = ['write_bank_plots']
 
@@ -54,7 +54,7 @@ def write_bank_plots(records: Sequence[RunRecord], figures: dict[str, Any],
         The files written.
 
     """
-    plt = _pyplot()
+    plt = pyplot()
     paths = [out_dir / 'delay_vs_fault_size.png', out_dir / 'attribution.png']
     fig = _delay_figure(plt, records, figures)
     fig.savefig(paths[0], dpi=110)

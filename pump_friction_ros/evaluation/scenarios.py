@@ -50,11 +50,11 @@ from .settings import (
     TrapezoidSettings,
     WarmUpSettings,
 )
-from ..config import EstimatorConfig, ViscositySource
-from ..model import COMPONENTS
-from ..oil import WaltherViscosity
-from ..simulate import DutyCycle, trapezoid_speed_profile
-from ..table import FrictionTable
+from ..core.node_parameters import EstimatorConfig, ViscositySource
+from ..physics.model import COMPONENTS
+from ..physics.oil import WaltherViscosity
+from ..sim.duty_cycle import DutyCycle, trapezoid_speed_profile
+from ..table.friction_table import FrictionTable
 
 __all__ = ['Scenario', 'SimulatedScenario', 'simulate_scenario', 'speed_profile',
            'warm_up_temperature']

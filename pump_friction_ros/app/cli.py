@@ -1,0 +1,475 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Command line ``pump_friction``: the paper's units (rpm, bar, cSt) live here and only here."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Sequence
+import json
+import math
+import os
+from pathlib import Path
+import sys
+from typing import Any, NoReturn, TYPE_CHECKING
+
+import numpy as np
+
+from . import data_commands
+from ..errors import PumpFrictionError, UsageError
+from ..physics.model import COMPONENTS, PumpModel
+from ..physics.pump_parameters import load_pump
+from ..physics.units import (
+    bar_to_pa,
+    CC_TO_M3,
+    cst_to_m2_s,
+    MM_TO_M,
+    rpm_to_rad_s,
+)
+
+if TYPE_CHECKING:
+    from ..table.friction_table import FrictionTable
+
+__all__ = ['main']
+
+MAX_SPEED_RPM = 100_000.0
+MAX_PRESSURE_BAR = 2_000.0
+MAX_VISCOSITY_CST = 10_000.0
+
+
+class _Parser(argparse.ArgumentParser):
+    """
+    Argument parser that reports a bad argument in one line and exits with code 2.
+
+    Abbreviations are off (``allow_abbrev=False``) for the main parser and every
+    sub-command, so that a typo such as ``--plot`` for ``--plots`` is an error instead of
+    a guess.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs['allow_abbrev'] = False
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> NoReturn:
+        """Raise `UsageError` instead of printing usage and exiting."""
+        raise UsageError(f'{message} (see {self.prog} --help)')
+
+
+def _bounded_float(name: str, low: float, high: float) -> Callable[[str], float]:
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'{name} must be a number, got {text!r}') from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f'{name} must be finite, got {text!r}')
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f'{name} must be in [{low:g}, {high:g}], '
+                                             f'got {value:g}')
+        return value
+
+    return parse
+
+
+def _bounded_int(name: str, low: int, high: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'{name} must be an integer, got {text!r}') from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f'{name} must be in [{low}, {high}], got {value}')
+        return value
+
+    return parse
+
+
+_speed = _bounded_float('--speed-rpm', -MAX_SPEED_RPM, MAX_SPEED_RPM)
+_pressure = _bounded_float('--pressure-bar', -MAX_PRESSURE_BAR, MAX_PRESSURE_BAR)
+_viscosity = _bounded_float('--viscosity-cst', 1e-3, MAX_VISCOSITY_CST)
+
+
+def _json_number(value: float) -> float | None:
+    """Finite floats as they are, NaN as JSON null."""
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _model(args: argparse.Namespace) -> PumpModel:
+    return PumpModel(load_pump(args.pump))
+
+
+def _viscosity_m2_s(args: argparse.Namespace, model: PumpModel) -> float:
+    if args.viscosity_cst is None:
+        return model.params.oil.viscosity_m2_s
+    return cst_to_m2_s(args.viscosity_cst)
+
+
+def _cmd_paper_check(args: argparse.Namespace) -> int:
+    from ..physics.paper import format_checks, paper_checks
+
+    model = _model(args)
+    rows = paper_checks(model)
+    if args.json:
+        print(json.dumps([{'quantity': r.quantity, 'unit': r.unit, 'paper': r.paper,
+                           'model': r.model, 'relative_difference': r.relative_difference,
+                           'kind': r.kind, 'tolerance': r.tolerance, 'holds': r.holds,
+                           'source': r.source, 'note': r.note} for r in rows], indent=2))
+    else:
+        print(format_checks(rows, model.params.name))
+    return 0
+
+
+def torque_record(model: PumpModel, speed_rad_s: float, pressure_pa: float,
+                  viscosity_m2_s: float) -> dict[str, float | None]:
+    """
+    Revolution-mean torques of one operating point, keyed as in ``torque --json``.
+
+    Parameters
+    ----------
+    model : PumpModel
+        The pump model.
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    pressure_pa : float
+        Pressure difference [Pa].
+    viscosity_m2_s : float
+        Oil kinematic viscosity [m^2/s].
+
+    Returns
+    -------
+    dict
+        Signed torques [N*m] and efficiency [-] (None when undefined).
+
+    """
+    res = model.evaluate(speed_rad_s, pressure_pa, viscosity_m2_s)
+    record = {'theoretical_nm': res.theoretical_nm[0]}
+    record.update({f'{c}_nm': res.component_nm(c)[0] for c in COMPONENTS})
+    record.update(friction_nm=res.friction_nm[0], input_nm=res.input_nm[0],
+                  efficiency=res.efficiency[0])
+    return {k: _json_number(v) for k, v in record.items()}
+
+
+def _print_record(record: dict[str, float | None], header: str, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(record, indent=2))
+        return
+    print(header)
+    for key, value in record.items():
+        shown = 'undefined' if value is None else f'{value:.6g}'
+        print(f'  {key:<24} {shown}')
+
+
+def table_record(table: FrictionTable, speed_rad_s: float, pressure_pa: float,
+                 viscosity_m2_s: float) -> tuple[dict[str, float | None], int]:
+    """
+    Torques of one operating point from a friction table, keyed as `torque_record`.
+
+    Parameters
+    ----------
+    table : FrictionTable
+        The table.
+    speed_rad_s : float
+        Shaft speed [rad/s].
+    pressure_pa : float
+        Pressure difference [Pa].
+    viscosity_m2_s : float
+        Oil kinematic viscosity [m^2/s].
+
+    Returns
+    -------
+    tuple
+        The record (signed torques [N*m], efficiency [-] or None) and the lookup flags.
+
+    """
+    res = table.lookup(speed_rad_s, pressure_pa, viscosity_m2_s)
+    record = {'theoretical_nm': res.theoretical_nm}
+    record.update({f'{c}_nm': v for c, v in zip(COMPONENTS, res.components_nm, strict=True)})
+    record.update(friction_nm=res.friction_nm, input_nm=res.input_nm, efficiency=res.efficiency)
+    return {k: _json_number(v) for k, v in record.items()}, res.flags
+
+
+def _cmd_torque(args: argparse.Namespace) -> int:
+    params = load_pump(args.pump)
+    speed, pressure = rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar)
+    viscosity = (params.oil.viscosity_m2_s if args.viscosity_cst is None
+                 else cst_to_m2_s(args.viscosity_cst))
+    if args.table:
+        from ..paths import resolve_path
+        from ..table.friction_table import describe_flags
+        from ..table.table_files import load_table
+
+        table_path = resolve_path(args.table, '--table', must_exist=False)
+        record, flags = table_record(load_table(table_path, params), speed, pressure,
+                                     viscosity)
+        if flags:
+            print(f"pump_friction: warning: {describe_flags(flags)}: clamped to the table's "
+                  'edge', file=sys.stderr)
+        source = f'table {args.table}'
+    else:
+        record = torque_record(PumpModel(params), speed, pressure, viscosity)
+        source = 'full model'
+    broken = [key for key, value in record.items() if value is None and key != 'efficiency']
+    if broken:  # validation keeps pump files physical; never print a torque as undefined
+        raise PumpFrictionError(f'{params.name}: the model gives no finite {", ".join(broken)}'
+                                " at this operating point; check the pump file's values")
+    _print_record(record, f'{params.name}: {args.speed_rpm:g} rpm, {args.pressure_bar:g} bar, '
+                  f'{source} (torques in N*m, signed)', args.json)
+    return 0
+
+
+def _cmd_build_table(args: argparse.Namespace) -> int:
+    from ..progress import ProgressBar
+    from ..staging import StagedOutputs
+    from ..table.friction_table import build_table, TableSpec
+    from ..table.table_files import cached_table_path
+
+    params = load_pump(args.pump)
+    spec = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
+                     max_pressure_pa=bar_to_pa(args.max_pressure_bar),
+                     min_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[0]),
+                     max_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[1]))
+    outputs = StagedOutputs()
+    try:
+        if args.out:  # checked and made before the build; moved into place at the end
+            staged = outputs.add(args.out, args.force, False)
+            out, path = staged.target, staged.path
+        else:  # the cache is rebuilt in place (it is a cache; saved atomically)
+            out = path = cached_table_path(params)
+        with ProgressBar('building table', enabled=not args.quiet) as bar:
+            table = build_table(params, spec, progress=bar)
+        table.save(path)
+        outputs.commit()
+    except BaseException:
+        outputs.discard()
+        raise
+    shape = 'x'.join(str(n) for n in table.torque_nm.shape[:-1])
+    print(f'{out}: {shape} grid (mode x speed x pressure x viscosity), '
+          f'{table.metadata["build_seconds"]:.2f} s, pump {params.name} '
+          f'sha256 {params.sha256[:12]}')
+    return 0
+
+
+def _cmd_kinematics(args: argparse.Namespace) -> int:
+    model = _model(args)
+    geom = model.params.geometry
+    res = model.evaluate(rpm_to_rad_s(args.speed_rpm), bar_to_pa(args.pressure_bar),
+                         _viscosity_m2_s(args, model), waveforms=True)
+    wf = res.waveforms
+    record = {
+        'stroke_mm': geom.stroke_m / MM_TO_M,
+        'displacement_cc': geom.displacement_m3 / CC_TO_M3,
+        'head_speed_max_m_s': float(np.abs(wf.head_velocity_m_s[0]).max()),
+        'piston_omega_max_rad_s': float(np.linalg.norm(wf.piston_omega_rad_s[0], axis=-1).max()),
+        'joint_force_max_n': float(res.joint_force_max_n[0]),
+        'head_force_max_n': float(res.head_force_max_n[0]),
+    }
+    _print_record({k: _json_number(v) for k, v in record.items()},
+                  f'{model.params.name}: {args.speed_rpm:g} rpm, {args.pressure_bar:g} bar',
+                  args.json)
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from .model_figures import write_model_figures
+
+    model = _model(args)
+    for path in write_model_figures(model, Path(args.out)):
+        print(path)
+    return 0
+
+
+def _add_pump(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('--pump', metavar='FILE', default=None,
+                        help='pump parameter YAML, package://pump_friction_ros/... path or '
+                        'shipped set name, e.g. hong_doh_2004_consistent (default: '
+                        'hong_doh_2004)')
+
+
+def _add_viscosity(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('--viscosity-cst', type=_viscosity, default=None, metavar='CST',
+                        help="oil kinematic viscosity [cSt] (default: the pump file's)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """
+    Build the ``pump_friction`` argument parser.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Parser with one sub-command per job.
+
+    """
+    parser = _Parser(prog='pump_friction',
+                     description='Bent-axis pump friction model (Hong & Doh 2004).')
+    sub = parser.add_subparsers(dest='command', required=True, parser_class=_Parser)
+
+    p = sub.add_parser('paper-check', help="the paper's numbers next to the model's")
+    _add_pump(p)
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_paper_check)
+
+    p = sub.add_parser('torque', help='revolution-mean torques at one operating point')
+    p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',
+                   help='shaft speed [rpm], signed')
+    p.add_argument('--pressure-bar', type=_pressure, required=True, metavar='P',
+                   help='pressure difference p_A - p_B [bar], signed')
+    _add_viscosity(p)
+    _add_pump(p)
+    p.add_argument('--table', metavar='FILE', default=None,
+                   help='answer from this friction table instead of the full model')
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_torque)
+
+    p = sub.add_parser('build-table', help='precompute the friction-torque table')
+    _add_pump(p)
+    p.add_argument('--out', metavar='FILE', default=None,
+                   help='output .npz (default: the cache used when no table is given)')
+    p.add_argument('--max-speed-rpm', type=_bounded_float('--max-speed-rpm', 100.0,
+                                                          MAX_SPEED_RPM), default=12000.0,
+                   metavar='N', help='speed envelope [rpm] (default 12000)')
+    p.add_argument('--max-pressure-bar', type=_bounded_float('--max-pressure-bar', 1.0,
+                                                             MAX_PRESSURE_BAR), default=350.0,
+                   metavar='P', help='pressure-difference envelope [bar] (default 350)')
+    p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=[10.0, 100.0],
+                   metavar=('LOW', 'HIGH'), help='viscosity range [cSt] (default 10 100)')
+    p.add_argument('--force', action='store_true', help='replace an existing --out file')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=_cmd_build_table)
+
+    p = sub.add_parser('kinematics', help='stroke, displacement, piston speeds and forces')
+    p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',
+                   help='shaft speed [rpm], signed')
+    p.add_argument('--pressure-bar', type=_pressure, default=0.0, metavar='P',
+                   help='pressure difference [bar] for the forces (default 0)')
+    _add_viscosity(p)
+    _add_pump(p)
+    p.add_argument('--json', action='store_true', help='machine-readable output')
+    p.set_defaults(func=_cmd_kinematics)
+
+    p = sub.add_parser('replay', help="the node's outputs from rosbag2 bags")
+    p.add_argument('bags', nargs='+', metavar='BAG',
+                   help='bag directories (sqlite3 or mcap), or folders holding bags')
+    p.add_argument('--params', metavar='FILE', action='append', default=None,
+                   help='node parameters file; may be given several times, later files '
+                   "overriding earlier ones (default: the node's declared defaults, which "
+                   'config/torque_estimator.yaml repeats)')
+    p.add_argument('--out', metavar='OUT_BAG', default=None,
+                   help='output bag (several bags: a folder, one bag each)')
+    p.add_argument('--csv', metavar='FILE', default=None,
+                   help='CSV, one row per estimate (several bags: a folder)')
+    p.add_argument('--plots', metavar='DIR', default=None, help='folder for PNG plots')
+    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW',
+                   help="the node's topic OLD is NEW in the bag")
+    p.add_argument('--storage', choices=('sqlite3', 'mcap'), default=None,
+                   help="output bag storage (default: the input's)")
+    p.add_argument('--compression', choices=('auto', 'none', 'zstd'), default='auto',
+                   help='output bag zstd compression: auto follows the input (default), zstd '
+                   'is chunks for mcap and file compression for sqlite3')
+    p.add_argument('--force', action='store_true', help='replace existing outputs')
+    p.add_argument('--workers', type=int, default=os.cpu_count() or 1, metavar='N',
+                   help='parallel local processes for several bags (default: CPU count)')
+    p.add_argument('--dask', metavar='ADDRESS', default=None,
+                   help='run the bags on this Dask scheduler (extra [fleet])')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=data_commands.cmd_replay)
+
+    p = sub.add_parser('make-sample-bags', help='write the simulated sample bags')
+    p.add_argument('--out', required=True, metavar='DIR', help='output folder')
+    p.add_argument('--seed', type=int, default=0, metavar='N', help='random seed (default 0)')
+    p.add_argument('--duration-s', type=_bounded_float('--duration-s', 1.0, 86400.0),
+                   default=75.0, metavar='S', help='length of each bag [s] (default 75)')
+    _add_pump(p)
+    p.set_defaults(func=data_commands.cmd_make_sample_bags)
+
+    p = sub.add_parser('calibrate', help='fit the open friction parameters to data')
+    p.add_argument('inputs', nargs='+', metavar='INPUT',
+                   help='bench CSV files (speed_rpm, pressure_bar, torque_nm[, viscosity_cst '
+                   '| temperature_c]) or rosbag2 bags')
+    p.add_argument('--pump', required=True, metavar='BASE.yaml', help='base pump file')
+    p.add_argument('--out', required=True, metavar='MY_PUMP.yaml', help='calibrated pump file')
+    p.add_argument('--report', metavar='DIR', default=None, help='report.json and PNG plots')
+    p.add_argument('--fix', nargs='+', default=[], metavar='NAME',
+                   help='hold these at their base values (see docs/calibration.md)')
+    p.add_argument('--params', metavar='FILE', action='append', default=None,
+                   help='node parameters (bags: topics, filter; oil; inertia and drive loss '
+                   'start values); may be given several times, later files overriding')
+    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW')
+    p.add_argument('--whole-record', action='store_true',
+                   help='bags: fit friction on every sample, not only near-steady ones')
+    p.add_argument('--force', action='store_true', help='replace an existing output file')
+    p.set_defaults(func=data_commands.cmd_calibrate)
+
+    p = sub.add_parser('evaluate-monitor', help='scenario bank: false alarms, detection '
+                       'delay, attribution and coverage of the wear monitor')
+    p.add_argument('--quick', action='store_true',
+                   help='the small bank of the test suite (default: the benchmark, >= 10 h '
+                   'of nominal running)')
+    p.add_argument('--workers', type=_bounded_int('--workers', 1, 1024),
+                   default=os.cpu_count() or 1, metavar='N',
+                   help='parallel processes (default: CPU count); same records for any N')
+    p.add_argument('--out', metavar='DIR', default=None,
+                   help='folder for records.csv, figures.json, table.md and PNG plots')
+    p.add_argument('--seed', type=int, default=0, metavar='N', help='bank seed (default 0)')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=data_commands.cmd_evaluate_monitor)
+
+    p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")
+    p.add_argument('--out', required=True, metavar='DIR', help='output folder')
+    _add_pump(p)
+    p.set_defaults(func=_cmd_plot)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """
+    Run the ``pump_friction`` command line.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C.
+
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        return args.func(args)
+    except PumpFrictionError as exc:
+        return _fail(str(exc))
+    except BrokenPipeError:  # e.g. piped into head
+        return 0
+    except KeyboardInterrupt:  # every output is staged: discarded on the way up
+        print('pump_friction: interrupted', file=sys.stderr)
+        return 130
+    except OSError as exc:  # the environment (disk full, permissions) rather than the input
+        where = f': {exc.filename}' if exc.filename else ''
+        return _fail(f'{exc.strerror or type(exc).__name__}{where}')
+
+
+def _fail(message: str) -> int:
+    """Print one error line on stderr and return exit code 2."""
+    print(f'pump_friction: error: {" ".join(message.split())}', file=sys.stderr)
+    return 2
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,168 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The /diagnostics status of the estimator: level, message and key-values (units in keys)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+
+from .estimate_record import COUNTERS, Estimate
+from .monitor import LEVEL_NAMES, OK, STALE, WearMonitor
+from .node_parameters import EstimatorConfig
+from ..physics.model import COMPONENTS
+from ..table.friction_table import describe_flags, NOT_FINITE
+
+__all__ = ['ATTRIBUTION_KEYS', 'DiagnosticSnapshot', 'format_value', 'level_message',
+           'snapshot']
+
+
+@dataclass(frozen=True)
+class DiagnosticSnapshot:
+    """What /diagnostics reports: level, message and key-values with units in the keys."""
+
+    level: int
+    message: str
+    values: list[tuple[str, str]] = field(default_factory=list)
+
+
+def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
+             config: EstimatorConfig, stale_reason: str, now_ns: int) -> DiagnosticSnapshot:
+    """
+    Status at time ``now_ns``.
+
+    Parameters
+    ----------
+    last : Estimate or None
+        The latest estimate.
+    monitor : WearMonitor
+        The wear monitor.
+    counts : dict
+        The estimator's counters (`COUNTERS`).
+    config : EstimatorConfig
+        Parameters (stale timeout, CUSUM thresholds).
+    stale_reason : str
+        Why the latest sample made no estimate.
+    now_ns : int
+        Current time of the node's clock (or of the replay) [ns].
+
+    Returns
+    -------
+    DiagnosticSnapshot
+        Level (STALE when no estimate for ``stale_timeout_s``), message, key-values.
+
+    """
+    est = last
+    mon = monitor
+    age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
+    if est is None or age_s > config.stale_timeout_s:
+        level = STALE
+        message = f'stale: {stale_reason}' if est is None or counts['stale_skips'] \
+            else 'stale: no shaft speed'
+    else:
+        level = mon.level
+        message = level_message(level, mon)
+    if est is not None and est.table_flags & ~NOT_FINITE:
+        message += f'; outside the table: {describe_flags(est.table_flags)}'
+    nan = math.nan
+    values: list[tuple[str, float | int | str]] = [
+        ('level', level),
+        ('level_name', LEVEL_NAMES[level]),
+        ('seconds_since_estimate_s', age_s),
+        ('speed_rad_s', est.speed_rad_s if est else nan),
+        ('pressure_diff_pa', est.pressure_diff_pa if est else nan),
+        ('viscosity_m2_s', est.viscosity_m2_s if est else nan),
+        ('expected_torque_nm', est.expected_nm if est else nan),
+        ('theoretical_torque_nm', est.theoretical_nm if est else nan),
+        ('friction_torque_nm', est.friction_nm if est else nan),
+    ]
+    for name, value in zip(COMPONENTS, est.components_nm if est else (nan,) * 4,
+                           strict=True):
+        values.append((f'{name}_torque_nm', value))
+    values += [
+        ('inertia_torque_nm', est.inertia_nm if est else nan),
+        ('efficiency', est.efficiency if est else nan),
+        ('measured_torque_nm', est.measured_nm if est else nan),
+        ('residual_nm', est.residual_nm if est else nan),
+        ('residual_ewma_nm', mon.ewma_nm),
+        ('residual_std_nm', mon.residual_std_nm),
+        ('cusum_pos_nm_s', mon.cusum_pos_nm_s),
+        ('cusum_neg_nm_s', mon.cusum_neg_nm_s),
+        ('cusum_warn_nm_s', config.cusum_warn_nm_s),
+        ('cusum_error_nm_s', config.cusum_error_nm_s),
+    ]
+    att = mon.attribution
+    for name, value, offset, std in zip(ATTRIBUTION_KEYS, att.x, ATTRIBUTION_OFFSETS, att.std,
+                                        strict=True):
+        values += [(name, float(value) + offset), (f'{name}_std', float(std))]
+    values.append(('alarm_onset_s', mon.alarm_onset_s))
+    values += [(name, counts[name]) for name in COUNTERS]
+    return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
+
+
+def level_message(level: int, mon: WearMonitor) -> str:
+    """
+    Return the status message for a level: what is above or below the model, and why.
+
+    Parameters
+    ----------
+    level : int
+        OK, WARN or ERROR.
+    mon : WearMonitor
+        The monitor (its sums and the attribution's verdict).
+
+    Returns
+    -------
+    str
+        The message.
+
+    """
+    if level == OK:
+        return 'friction as modelled'
+    side = 'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below'
+    verdict = mon.attribution.verdict(1.0 if side == 'above' else -1.0)[1]
+    return f'{LEVEL_NAMES[level]}: torque {side} model: {verdict}'
+
+
+ATTRIBUTION_KEYS = ('valve_plate_friction_scale', 'other_friction_scale',
+                    'extra_drive_loss_nm', 'torque_offset_nm', 'pressure_sensor_gain_scale')
+"""Diagnostic keys of the attribution's terms (``attribution.TERMS`` order), each with a
+``_std`` twin."""
+ATTRIBUTION_OFFSETS = (0.0, 0.0, 0.0, 0.0, 1.0)
+"""Added to each term for its key: the pressure gain error g is reported as the gain 1 + g."""
+
+
+def format_value(value: float | int | str) -> str:
+    """
+    Return a key-value's value as plain text that plotting tools parse as a number.
+
+    Parameters
+    ----------
+    value : float, int or str
+        The value.
+
+    Returns
+    -------
+    str
+        ``repr`` of a finite float, ``nan`` / ``inf`` / ``-inf`` spelled so.
+
+    """
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int):
+        return str(value)
+    if math.isfinite(value):
+        return repr(float(value))
+    return 'nan' if math.isnan(value) else ('inf' if value > 0 else '-inf')

@@ -1,0 +1,417 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Online torque estimator: the ROS-free core of the ``torque_estimator`` node and the replay.
+
+Inputs arrive as timestamped samples (stamps in integer nanoseconds) through `on_input`, one
+call per message, whose kinds the table in ``inputs`` lists. Each accepted shaft-speed
+sample triggers an estimate from the latest sample of every other input, provided each is
+within ``max_input_age_s`` of it (sample-and-hold); otherwise no estimate is made and the
+skip is counted.
+
+Expected input torque = theoretical + friction (table) + J * filtered d(omega)/dt
++ drive loss (opposing the motion), by `model.input_torque_nm`. The derivative is that of
+the speed through two first-order low-pass stages (``speed_filter``), so noisy speed does
+not make it explode. The residual, measured minus expected, exists when a fresh measured
+torque does; it feeds the `WearMonitor`.
+
+Rejected and counted, never raised: non-finite values, values beyond physical
+plausibility, stamps equal to (duplicate) or older than (out of order) the input's last
+accepted stamp, header stamps more than ``max_stamp_lead_s`` ahead of the receive time,
+and messages without a usable sample (`inputs.Defect`). After ``stamp_resync_samples``
+out-of-order samples of one input in a row its clock is taken as restarted (counted), so
+no single bad stamp can stall the estimator for longer than that.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+import math
+from typing import Any
+
+from .diagnostics import DiagnosticSnapshot, snapshot
+from .estimate_record import COUNTERS, Estimate
+from .inputs import Defect, InputKind
+from .monitor import WearMonitor
+from .node_parameters import (
+    EstimatorConfig,
+    PressureSource,
+    SpeedSource,
+    TorqueSource,
+    ViscositySource,
+)
+from .speed_filter import SpeedFilter
+from ..paths import resolve_path
+from ..physics.friction import smooth_sign_scalar
+from ..physics.model import efficiency_of, input_torque_nm, theoretical_torque_nm
+from ..physics.oil import WaltherViscosity
+from ..physics.pump_parameters import load_pump
+from ..table.friction_table import FrictionTable
+from ..table.table_files import cached_table, load_table
+
+__all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
+
+MAX_SPEED_RAD_S = 1.0e4
+"""|speed| above this (95,000 rpm) is not a plausible measurement: rejected."""
+MAX_PRESSURE_PA = 2.0e8
+"""|pressure| above this (2,000 bar) is rejected."""
+MAX_TORQUE_NM = 1.0e4
+"""|torque| above this is rejected."""
+TEMPERATURE_RANGE_C = (-60.0, 250.0)
+"""Oil temperatures outside this range are rejected."""
+_DEFECT_COUNTER = {Defect.MISSING_JOINT: 'rejected_missing_joint',
+                   Defect.MALFORMED: 'rejected_malformed',
+                   Defect.UNDECODABLE: 'rejected_undecodable'}
+
+
+@dataclass
+class _Input:
+    """Latest accepted sample of one input."""
+
+    name: str
+    stamp_ns: int | None = None
+    value: float = math.nan
+    out_of_order_run: int = 0
+
+
+class TorqueEstimator:
+    """
+    Expected torque, residual and wear monitoring from timestamped samples.
+
+    Parameters
+    ----------
+    config : EstimatorConfig
+        Validated parameters.
+    table : FrictionTable
+        Friction table of the pump in use (its provenance already checked).
+    default_viscosity_m2_s : float
+        Viscosity when the config gives none (the pump file's) [m^2/s].
+    pump_name : str
+        Name used in the diagnostics.
+
+    """
+
+    def __init__(self, config: EstimatorConfig, table: FrictionTable,
+                 default_viscosity_m2_s: float, pump_name: str = 'pump') -> None:
+        self.config = config
+        self.table = table
+        self.pump_name = pump_name
+        self._viscosity_m2_s = config.oil_viscosity_m2_s or default_viscosity_m2_s
+        self._walther = WaltherViscosity(config.oil_viscosity_40c_m2_s,
+                                         config.oil_viscosity_100c_m2_s)
+        self._max_age_ns = round(config.max_input_age_s * 1e9)
+        self._max_temp_age_ns = round(config.max_temperature_age_s * 1e9)
+        self._max_lead_ns = round(config.max_stamp_lead_s * 1e9)
+        self._ports = config.pressure_source == PressureSource.PORTS
+        self._use_temperature = config.viscosity_source == ViscositySource.TEMPERATURE
+        self._joint_speed = config.speed_source == SpeedSource.JOINT_STATE
+        self._joint_torque = config.torque_source == TorqueSource.JOINT_STATE
+        # constants of the per-sample path, read once
+        self._inertia = config.rotor_inertia_kg_m2
+        self._drive_loss = config.drive_loss_torque_nm
+        self._monitor_min_speed = config.monitor_min_speed_rad_s
+        self._monitor_max_accel = config.monitor_max_accel_rad_s2
+        self._monitor_max_dt = config.max_input_age_s
+        self._decimation = config.output_decimation
+        self._displacement_m3 = table.displacement_m3
+        self._zero_speed = table.zero_speed_threshold_rad_s
+        self._eff_min_speed = table.efficiency_min_speed_rad_s
+        self._eff_min_pressure = table.efficiency_min_pressure_pa
+        self.monitor = WearMonitor(config)
+        self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
+        # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
+        self._handlers: tuple[Callable[[int, Any, float | None], Estimate | None], ...] = (
+            self._on_joint_state, self._on_speed, self._on_torque, self._on_pressure,
+            self._on_pressure_a, self._on_pressure_b, self._on_temperature)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget all inputs, filters, counters and the monitor's state."""
+        self.counts = dict.fromkeys(COUNTERS, 0)
+        self._speed = _Input('speed')
+        self._pressure = _Input('pressure')
+        self._port_a = _Input('pressure_a')
+        self._port_b = _Input('pressure_b')
+        self._torque = _Input('torque')
+        self._temperature = _Input('temperature')
+        self.filter.reset()
+        self.last: Estimate | None = None
+        self.last_stale_reason = 'no input yet'
+        self.reset_monitor()
+
+    def reset_monitor(self) -> None:
+        """Forget the wear monitor's state (after a repair): friction as modelled, no alarm."""
+        self.monitor.reset()
+        self._monitor_stamp_ns: int | None = None
+
+    # -- inputs ---------------------------------------------------------------------------
+
+    def on_input(self, kind: InputKind, stamp_ns: int, value: float | None,
+                 torque_nm: float | None = None, receive_ns: int | None = None
+                 ) -> Estimate | None:
+        """
+        Take one input message's sample: the one entry point of the node and the replay.
+
+        Parameters
+        ----------
+        kind : InputKind
+            What the message carries (``inputs.INPUTS``).
+        stamp_ns : int
+            Sample time [ns]: the header stamp, or the receive time (see ``inputs``).
+        value : float or None
+            The value in SI (JointState: the speed, None when the message has none).
+        torque_nm : float or None
+            JointState only: the measured torque (effort) [N m], None when absent.
+        receive_ns : int, optional
+            When the message was received (the replay: its log time) [ns]; a stamp more
+            than ``max_stamp_lead_s`` ahead of it is rejected.
+
+        Returns
+        -------
+        Estimate or None
+            The estimate a shaft-speed sample made, if any.
+
+        """
+        if receive_ns is not None and stamp_ns - receive_ns > self._max_lead_ns:
+            self.counts['rejected_future_stamp'] += 1
+            return None
+        return self._handlers[kind](stamp_ns, value, torque_nm)
+
+    def on_defect(self, defect: Defect) -> None:
+        """
+        Count a message that carried no usable sample.
+
+        Parameters
+        ----------
+        defect : Defect
+            Why (a missing joint, malformed arrays, an undecodable bag message).
+
+        """
+        self.counts[_DEFECT_COUNTER[Defect(defect)]] += 1
+
+    def on_joint_state(self, stamp_ns: int, speed_rad_s: float | None,
+                       torque_nm: float | None) -> Estimate | None:
+        """
+        Take a JointState sample: speed (velocity) and / or torque (effort).
+
+        Parameters
+        ----------
+        stamp_ns : int
+            Sample time [ns].
+        speed_rad_s : float or None
+            Shaft speed [rad/s], None when the message carries none.
+        torque_nm : float or None
+            Measured motor torque [N m], None when the message carries none.
+
+        Returns
+        -------
+        Estimate or None
+            The estimate made, if any.
+
+        """
+        return self._on_joint_state(stamp_ns, speed_rad_s, torque_nm)
+
+    def on_pressure(self, stamp_ns: int, pressure_diff_pa: float) -> bool:
+        """Take a pressure difference p_A - p_B sample [Pa]; False if rejected."""
+        return self._accept(self._pressure, stamp_ns, pressure_diff_pa, MAX_PRESSURE_PA)
+
+    def _on_joint_state(self, stamp_ns: int, speed: float | None,
+                        torque: float | None) -> Estimate | None:
+        if speed is None and torque is None:
+            self.counts['rejected_malformed'] += 1  # a JointState with neither for the joint
+            return None
+        if torque is not None and self._joint_torque:
+            self._accept(self._torque, stamp_ns, torque, MAX_TORQUE_NM)
+        if speed is not None and self._joint_speed:
+            return self._on_speed(stamp_ns, speed, None)
+        return None
+
+    def _on_torque(self, stamp_ns: int, value: float, _: object) -> None:
+        self._accept(self._torque, stamp_ns, value, MAX_TORQUE_NM)
+
+    def _on_pressure(self, stamp_ns: int, value: float, _: object) -> None:
+        self._accept(self._pressure, stamp_ns, value, MAX_PRESSURE_PA)
+
+    def _on_pressure_a(self, stamp_ns: int, value: float, _: object) -> None:
+        self._accept(self._port_a, stamp_ns, value, MAX_PRESSURE_PA)
+
+    def _on_pressure_b(self, stamp_ns: int, value: float, _: object) -> None:
+        self._accept(self._port_b, stamp_ns, value, MAX_PRESSURE_PA)
+
+    def _on_temperature(self, stamp_ns: int, value: float, _: object) -> None:
+        if math.isfinite(value) and not (
+                TEMPERATURE_RANGE_C[0] <= value <= TEMPERATURE_RANGE_C[1]):
+            self.counts['rejected_out_of_range'] += 1
+            return
+        self._accept(self._temperature, stamp_ns, value, math.inf)
+
+    def _accept(self, slot: _Input, stamp_ns: int, value: float, limit: float) -> bool:
+        counts = self.counts
+        if not math.isfinite(value):
+            counts['rejected_non_finite'] += 1
+            return False
+        if abs(value) > limit:
+            counts['rejected_out_of_range'] += 1
+            return False
+        last = slot.stamp_ns
+        if last is not None and stamp_ns <= last:
+            if stamp_ns == last:
+                counts['rejected_duplicate'] += 1
+                return False
+            slot.out_of_order_run += 1
+            if slot.out_of_order_run < self.config.stamp_resync_samples:
+                counts['rejected_out_of_order'] += 1
+                return False
+            counts['stamp_resyncs'] += 1  # the source's clock restarted: follow it
+        slot.out_of_order_run = 0
+        slot.stamp_ns = stamp_ns
+        slot.value = value
+        return True
+
+    def _on_speed(self, stamp_ns: int, speed: float, _: object) -> Estimate | None:
+        if not self._accept(self._speed, stamp_ns, speed, MAX_SPEED_RAD_S):
+            return None
+        accel = self.filter.update(stamp_ns, speed)
+        p = self._pressure
+        if not self._ports and p.stamp_ns is not None and \
+                -self._max_age_ns <= stamp_ns - p.stamp_ns <= self._max_age_ns:
+            dp: float | None = p.value  # the common case, inline
+        else:
+            dp = self._pressure_at(stamp_ns)
+        if dp is None:
+            self._stale(f'no fresh {"port pressures" if self._ports else "pressure"}')
+            return None
+        viscosity = self._viscosity_at(stamp_ns) if self._use_temperature \
+            else self._viscosity_m2_s
+        if viscosity is None:
+            self._stale('no fresh oil temperature')
+            return None
+        return self._estimate(stamp_ns, speed, dp, viscosity, accel)
+
+    # -- internals ------------------------------------------------------------------------
+
+    def _fresh(self, slot: _Input, stamp_ns: int, max_age_ns: int) -> bool:
+        return slot.stamp_ns is not None and abs(stamp_ns - slot.stamp_ns) <= max_age_ns
+
+    def _pressure_at(self, stamp_ns: int) -> float | None:
+        if self._ports:
+            a, b = self._port_a, self._port_b
+            if self._fresh(a, stamp_ns, self._max_age_ns) and \
+                    self._fresh(b, stamp_ns, self._max_age_ns):
+                return a.value - b.value
+            return None
+        p = self._pressure
+        return p.value if self._fresh(p, stamp_ns, self._max_age_ns) else None
+
+    def _viscosity_at(self, stamp_ns: int) -> float | None:
+        t = self._temperature
+        return self._walther(t.value) if self._fresh(t, stamp_ns, self._max_temp_age_ns) \
+            else None
+
+    def _stale(self, reason: str) -> None:
+        self.counts['stale_skips'] += 1
+        self.last_stale_reason = reason
+
+    def _estimate(self, stamp_ns: int, speed: float, dp: float, viscosity: float,
+                  accel: float) -> Estimate:
+        counts = self.counts
+        mags, flags = self.table.magnitudes(abs(speed), abs(dp), viscosity, speed * dp < 0.0)
+        if flags:
+            counts['clamped_to_table'] += 1
+        direction = smooth_sign_scalar(speed, self._zero_speed)
+        vp, bearing, joints, heads = mags
+        comps = (direction * vp, direction * bearing, direction * joints, direction * heads)
+        friction_mag = vp + bearing + joints + heads
+        theoretical = theoretical_torque_nm(self._displacement_m3, dp)
+        inertia = self._inertia * accel
+        steady = input_torque_nm(theoretical, friction_mag, direction, self._drive_loss)
+        expected = steady + inertia
+        efficiency = efficiency_of(theoretical, steady, speed, dp, self._eff_min_speed,
+                                   self._eff_min_pressure)
+        measured = residual = math.nan
+        monitor = self.monitor
+        torque = self._torque
+        if torque.stamp_ns is not None and abs(stamp_ns - torque.stamp_ns) <= self._max_age_ns:
+            measured = torque.value
+            residual = measured - expected
+            counts['residuals'] += 1
+            if abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel:
+                sign = 1.0 if speed > 0.0 else -1.0
+                last = self._monitor_stamp_ns
+                # a clock restart (stamp resync) steps back: a new run for the monitor
+                gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
+                self._monitor_stamp_ns = stamp_ns
+                friction_part = (measured - theoretical - inertia) * sign - self._drive_loss
+                monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
+                               residual, friction_part, vp, bearing, joints + heads,
+                               theoretical, sign)
+                counts['monitor_samples'] += 1
+        n = counts['estimates'] = counts['estimates'] + 1
+        estimate = Estimate(stamp_ns, speed, dp, viscosity, theoretical, comps,
+                            comps[0] + comps[1] + comps[2] + comps[3], inertia, accel,
+                            direction * self._drive_loss, expected, efficiency, measured,
+                            residual, monitor.theta_vp, monitor.valve_plate_scale_std,
+                            monitor.level, flags, (n - 1) % self._decimation == 0)
+        self.last = estimate
+        return estimate
+
+    # -- diagnostics ----------------------------------------------------------------------
+
+    def diagnostics(self, now_ns: int) -> DiagnosticSnapshot:
+        """
+        Status for /diagnostics at time ``now_ns`` (see ``diagnostics.snapshot``).
+
+        Parameters
+        ----------
+        now_ns : int
+            Current time of the node's clock (or of the replay) [ns].
+
+        Returns
+        -------
+        DiagnosticSnapshot
+            Level, message and key-values.
+
+        """
+        return snapshot(self.last, self.monitor, self.counts, self.config,
+                        self.last_stale_reason, now_ns)
+
+
+def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:
+    """
+    Build the estimator a config describes: pump file, table (given or cached), tuning.
+
+    Parameters
+    ----------
+    config : EstimatorConfig
+        Validated parameters.
+
+    Returns
+    -------
+    TorqueEstimator
+        Ready to take samples.
+
+    Raises
+    ------
+    ConfigError
+        Invalid pump file.
+    TableError
+        Unreadable table, or a table built for another pump or model version.
+
+    """
+    params = load_pump(config.pump_file or None)
+    table = load_table(resolve_path(config.table_file, 'table_file', must_exist=False), params) \
+        if config.table_file else cached_table(params)
+    return TorqueEstimator(config, table, params.oil.viscosity_m2_s, params.name)

@@ -1,0 +1,23 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Messages: ROS message bytes and values to and from SI, without ROS.
+
+The CDR parser of the input messages (in batches for the replay, one by one for the
+node) and the conversions of the outputs and diagnostics; the node and the bags layer
+both read and write messages through here.
+
+May import: core, base.
+"""

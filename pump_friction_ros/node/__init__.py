@@ -1,0 +1,22 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Node: the rclpy glue of ``torque_estimator``, and its CPU benchmark.
+
+The only layer that imports rclpy: callbacks convert messages to SI (through
+``messages``), call the core and convert back.
+
+May import: messages, core, table, physics, base.
+"""

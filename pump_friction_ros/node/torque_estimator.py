@@ -1,0 +1,352 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS 2 node ``torque_estimator``: thin rclpy glue around the ROS-free `TorqueEstimator`.
+
+Callbacks only convert messages to SI floats, call the core, and convert the results back.
+See README, "torque_estimator", for topics and parameters, docs/monitor.md for diagnostics,
+and docs/cpu_cost.md for why the node subscribes raw messages, publishes serialised Float64s
+and keeps its QoS event handlers to the one that can fire.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import math
+import signal
+import sys
+from typing import Any
+
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+import rclpy
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+import rclpy.logging
+from rclpy.node import Node
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    qos_policy_name_from_kind,
+    qos_profile_sensor_data,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+from rclpy.serialization import deserialize_message
+from sensor_msgs.msg import FluidPressure, JointState, Temperature
+from std_msgs.msg import Float64, Header
+from std_srvs.srv import Trigger
+
+from ..core.estimate_record import Estimate
+from ..core.estimator import estimator_from_config
+from ..core.inputs import (
+    FLOAT64,
+    FLUID_PRESSURE,
+    INPUTS,
+    inputs_for,
+    InputSpec,
+    JOINT_STATE,
+    TEMPERATURE,
+)
+from ..core.node_parameters import config_from_mapping, NODE_NAME, PARAMETERS, ParameterSpec
+from ..errors import PumpFrictionError
+from ..messages.cdr_message import MessageDecoder
+from ..messages.conversions import (
+    diagnostic_array,
+    DIAGNOSTICS_QOS_DEPTH,
+    float64_cdr,
+    MessageTypes,
+    OUTPUT_QOS_DEPTH,
+    OUTPUT_TOPICS,
+    outputs_of,
+    RELIABLE_INPUT_QOS_DEPTH,
+)
+
+_MESSAGE_CLASSES = {JOINT_STATE: JointState, FLOAT64: Float64, FLUID_PRESSURE: FluidPressure,
+                    TEMPERATURE: Temperature}
+
+
+def reliable_qos(depth: int) -> QoSProfile:
+    """
+    Return reliable, keep last ``depth``, volatile: the outputs' QoS, and reliable inputs'.
+
+    The replay writes the same profile into its output bag (``bags.sinks.output_qos``).
+
+    Parameters
+    ----------
+    depth : int
+        History depth [messages].
+
+    Returns
+    -------
+    QoSProfile
+        Deadline, lifespan and liveliness stay at the middleware's defaults.
+
+    """
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+
+
+def input_qos(reliable: bool) -> QoSProfile:
+    """
+    Return the QoS of the inputs: the sensor-data profile, or reliable with a deep history.
+
+    Parameters
+    ----------
+    reliable : bool
+        The ``reliable_inputs`` parameter.
+
+    Returns
+    -------
+    QoSProfile
+        Best effort, keep last 5 (``qos_profile_sensor_data``); or reliable, keep last
+        ``RELIABLE_INPUT_QOS_DEPTH``, volatile.
+
+    """
+    return reliable_qos(RELIABLE_INPUT_QOS_DEPTH) if reliable else qos_profile_sensor_data
+
+
+def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
+    """Parameter descriptor (description, range, read-only) from the shared spec."""
+    desc = ParameterDescriptor(description=spec.description, read_only=True)
+    if spec.choices:
+        desc.additional_constraints = 'one of: ' + ', '.join(spec.choices)
+    if spec.low is None or spec.high is None or not math.isfinite(spec.high):
+        return desc
+    if isinstance(spec.default, int):  # (bool parameters have no range)
+        desc.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
+                                           step=1)]
+    elif isinstance(spec.default, float):
+        desc.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
+                                                        to_value=float(spec.high), step=0.0)]
+    return desc
+
+
+class TorqueEstimatorNode(Node):
+    """Subscribes to shaft speed, pressure and motor torque; publishes the estimates."""
+
+    def __init__(self, **node_kwargs: Any) -> None:
+        super().__init__(NODE_NAME, **node_kwargs)
+        values = {}
+        for spec in PARAMETERS:
+            try:
+                self.declare_parameter(spec.name, spec.default, _descriptor(spec))
+            except (InvalidParameterValueException, InvalidParameterTypeException) as exc:
+                raise PumpFrictionError(f'parameter {spec.name}: {exc}') from None
+            values[spec.name] = self.get_parameter(spec.name).value
+        self.config = config_from_mapping(values, 'parameter ',
+                                          default_origin='a node parameter')
+        self.core = estimator_from_config(self.config)
+        self._types = MessageTypes(Float64, Time, Header, KeyValue, DiagnosticStatus,
+                                   DiagnosticArray)
+        # messages received per input, indexed by `InputKind` (tests, the CPU benchmark)
+        self.received = [0] * len(INPUTS)
+        cfg = self.config
+
+        # Every publisher, subscription and QoS event handler is one more entity that rclpy's
+        # executor puts into the wait set it rebuilds for every message, which is most of
+        # the node's CPU cost at 1 kHz (docs/cpu_cost.md). rclpy gives each publisher and
+        # subscription two handlers by default (incompatible QoS, incompatible type).
+        # Outputs: none. An incompatible subscriber is told by its own side (rclpy and
+        # rclcpp subscriptions warn by default), so ours would only repeat it.
+        quiet_publisher = PublisherEventCallbacks(use_default_callbacks=False)
+        self._pub = {name: self.create_publisher(Float64, f'~/{name}',
+                                                 reliable_qos(OUTPUT_QOS_DEPTH),
+                                                 event_callbacks=quiet_publisher)
+                     for name in OUTPUT_TOPICS}
+        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics',
+                                               reliable_qos(DIAGNOSTICS_QOS_DEPTH),
+                                               event_callbacks=quiet_publisher)
+
+        # Inputs: one handler, incompatible QoS, and only where it can fire. A best-effort,
+        # volatile subscription with the default deadline and liveliness (the sensor-data
+        # profile) requests the least of every policy, so every publisher matches it; a
+        # reliable one does not match a best-effort publisher, which then sends the node
+        # nothing: that must be said. (An rmw without the event makes rclpy skip the handler,
+        # `SubscriptionEventCallbacks.create_event_handlers` catches UnsupportedEventTypeError.)
+        in_qos = input_qos(cfg.reliable_inputs)
+        for inp in inputs_for(cfg):
+            events = SubscriptionEventCallbacks(
+                incompatible_qos=self._incompatible_qos_warning(inp.topic)
+                if cfg.reliable_inputs else None,
+                use_default_callbacks=False)
+            sub = self.create_subscription(_MESSAGE_CLASSES[inp.msgtype], inp.topic,
+                                           self._input_callback(inp), in_qos,
+                                           event_callbacks=events, raw=True)
+            if cfg.reliable_inputs and not sub.event_handlers:
+                self.get_logger().info(f'the middleware reports no incompatible QoS on '
+                                       f'{inp.topic}: a best-effort publisher goes unnoticed')
+        self.create_service(Trigger, '~/reset_monitor', self._on_reset)
+        self.create_timer(1.0 / cfg.diagnostics_rate_hz, self._on_diagnostics_timer)
+        self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
+        self.get_logger().info(
+            f'pump {self.core.pump_name}, table {self.core.table.metadata.get("source")}; '
+            f'inputs: speed {cfg.speed_source}, torque {cfg.torque_source}, pressure '
+            f'{cfg.pressure_source}, viscosity {cfg.viscosity_source}')
+
+    # -- conversions at the edge ----------------------------------------------------------
+
+    def _now_ns(self) -> int:
+        return self.get_clock().now().nanoseconds
+
+    def _publish(self, estimate: Estimate | None) -> None:
+        if estimate is None or not estimate.publish:
+            return
+        pub = self._pub
+        for name, value in outputs_of(estimate):
+            pub[name].publish(float64_cdr(value))  # serialised: no message object to build
+
+    # -- callbacks: message -> SI -> core -> message ----------------------------------------
+
+    def _input_callback(self, spec: InputSpec) -> Callable[[bytes], None]:
+        """Return the callback of one raw input subscription (serialised CDR in)."""
+        cls = _MESSAGE_CLASSES[spec.msgtype]
+        decode = MessageDecoder(spec, self.config.joint_name,
+                                lambda raw: deserialize_message(raw, cls))
+        core, kind, received, now_ns = self.core, spec.kind, self.received, self._now_ns
+
+        def on_message(raw: bytes) -> None:
+            received[kind] += 1
+            stamp, value, torque, defect = decode(raw)
+            if defect:
+                core.on_defect(defect)
+                return
+            now = now_ns()
+            self._publish(core.on_input(kind, stamp or now, value, torque, now))
+
+        return on_message
+
+    def _incompatible_qos_warning(self, topic: str) -> Callable[[Any], None]:
+        """Return an incompatible-QoS event handler warning once per topic and policy."""
+        warned: set[str] = set()
+
+        def on_event(event: Any) -> None:
+            try:
+                policy = qos_policy_name_from_kind(event.last_policy_kind)
+            except ValueError:
+                policy = str(event.last_policy_kind)
+            if policy in warned:
+                return
+            warned.add(policy)
+            self.get_logger().warning(
+                f'input {topic}: a publisher offers incompatible QoS ({policy}); nothing it '
+                f'sends reaches this node (reliable_inputs is true: is it best effort?)')
+
+        return on_event
+
+    def _on_diagnostics_timer(self) -> None:
+        now = self._now_ns()
+        self._diag_pub.publish(diagnostic_array(self._types, self.core.diagnostics(now), now,
+                                                self._status_name, self.config.hardware_id))
+
+    def _on_reset(self, request: Trigger.Request, response: Trigger.Response
+                  ) -> Trigger.Response:
+        self.core.reset_monitor()
+        response.success = True
+        response.message = 'wear monitor reset: friction as modelled, no alarm'
+        return response
+
+
+class StopSignals:
+    """
+    SIGINT and SIGTERM noted, never raised: the node stops through rclpy's own handler.
+
+    rclpy's signal handler (installed by ``rclpy.init``) shuts the context down on SIGINT and
+    SIGTERM, which ends the executor's spin with ``ExternalShutdownException``, and then
+    calls the handler that was there before it: this one. Python's default SIGINT handler
+    would raise ``KeyboardInterrupt`` wherever the main thread is; a second Ctrl-C (a
+    terminal sends one to the process group, launch forwards another) would then cut
+    ``destroy_node`` short with a traceback and exit code -2. Here every signal is only
+    recorded, so the clean-up always runs to its end.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.received: list[str] = []
+        self._previous: dict[int, Any] = {}
+
+    def __call__(self, signum: int, frame: Any) -> None:
+        """Note the signal (the Python-level handler)."""
+        self.received.append(signal.Signals(signum).name)
+
+    def __enter__(self) -> StopSignals:
+        """Install this handler for SIGINT and SIGTERM."""
+        for sig in self.SIGNALS:
+            self._previous[sig] = signal.signal(sig, self)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Restore the handlers, or ignore both signals if one came (the process stops)."""
+        for sig, handler in self._previous.items():
+            # A stopping process ignores further stop signals, to its very end: CPython
+            # resets Python-level handlers to SIG_DFL at finalisation (SIG_IGN it keeps), and
+            # a signal then, while the middleware tears down, would kill it with -2.
+            signal.signal(sig, signal.SIG_IGN if self.received else handler)
+
+
+def main(args: list[str] | None = None) -> int:
+    """
+    Run the node (console script ``torque_estimator``).
+
+    Parameters
+    ----------
+    args : list of str, optional
+        Command-line arguments for rclpy.
+
+    Returns
+    -------
+    int
+        0 on a normal shutdown (SIGINT, SIGTERM, or the context shut down elsewhere), 1 when
+        the parameters, pump file or table are invalid.
+
+    """
+    with StopSignals() as stop:
+        rclpy.init(args=args)
+        # Made before the node: an executor made after a signal has shut the context down
+        # fails in its constructor (and then in its __del__, with a traceback on stderr).
+        executor = SingleThreadedExecutor()
+        node = None
+        try:
+            if not stop.received:  # else a signal came before rclpy's handler was there
+                node = TorqueEstimatorNode()
+                executor.add_node(node)
+                executor.spin()
+        except PumpFrictionError as exc:
+            print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
+            return 1
+        except ExternalShutdownException:
+            pass
+        except Exception:
+            if not stop.received:  # else the context went away under the start-up
+                raise
+        finally:
+            why = stop.received[0] if stop.received else 'context shut down'
+            logger = node.get_logger().name if node is not None else NODE_NAME
+            executor.shutdown()
+            if node is not None:
+                node.destroy_node()
+            # after destroy_node: the line goes to the console, not to /rosout (whose
+            # publisher died with the context)
+            rclpy.logging.get_logger(logger).info(f'stopping on {why}')
+            rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,23 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Physics: the bent-axis pump after Hong & Doh (2004), ROS-free, in SI.
+
+Pump parameter sets (`pump_parameters`), kinematics, chamber pressure, piston dynamics,
+the four friction laws, oil viscosity, the whole-pump model and the paper check; each
+function names the equation it implements.
+
+May import: base.
+"""

@@ -1,0 +1,39 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Matplotlib for files: the non-interactive Agg backend, chosen where pyplot is first used."""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ['pyplot']
+
+
+def pyplot() -> Any:
+    """
+    Return ``matplotlib.pyplot`` on the Agg backend (PNG files, no display needed).
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+
+    """
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    return plt

@@ -1,0 +1,22 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Table: the friction-torque table precomputed from the model, and its files.
+
+`friction_table` builds it and looks it up (scalar and vectorised); `table_files` saves,
+loads and caches it with its provenance (pump hash, model version).
+
+May import: physics, base.
+"""
