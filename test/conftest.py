@@ -62,3 +62,8 @@ def pytest_configure(config):
     # markers the ament linters and launch_testing register themselves when ROS is sourced
     for marker in ('flake8', 'pep257', 'copyright', 'linter', 'launch_test', 'rostest'):
         config.addinivalue_line('markers', f'{marker}: ament / launch_testing marker')
+
+
+def level_from_msg(level):
+    """Return a DiagnosticStatus level as an int, from rclpy (bytes) or rosbags (int)."""
+    return level[0] if isinstance(level, (bytes, bytearray)) else int(level)

@@ -38,11 +38,7 @@ from pump_friction_ros.core.inputs import Defect, InputKind, INPUTS  # noqa: E40
 from pump_friction_ros.core.node_parameters import load_estimator_config  # noqa: E402
 from pump_friction_ros.errors import PumpFrictionError  # noqa: E402
 from pump_friction_ros.messages.cdr_message import MessageDecoder  # noqa: E402
-from pump_friction_ros.messages.conversions import (  # noqa: E402
-    input_sample,
-    level_from_msg,
-    stamp_to_ns,
-)
+from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns  # noqa: E402
 from pump_friction_ros.node.torque_estimator import TorqueEstimatorNode  # noqa: E402
 from pump_friction_ros.physics.model import PumpModel  # noqa: E402
 from pump_friction_ros.table.friction_table import build_table  # noqa: E402
@@ -53,6 +49,8 @@ from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from sensor_msgs.msg import FluidPressure, JointState, Temperature  # noqa: E402
 from std_msgs.msg import Float64, Header  # noqa: E402
+
+from .conftest import level_from_msg  # noqa: E402, I100
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml'
 SAMPLE_PARAMS = Path(__file__).resolve().parents[1] / 'bags' / 'eha_params.yaml'

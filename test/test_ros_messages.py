@@ -25,7 +25,6 @@ from pump_friction_ros.messages.conversions import (
     diagnostic_array,
     float64_cdr,
     joint_sample,
-    level_from_msg,
     level_to_msg,
     outputs_of,
     rosbags_types,
@@ -34,6 +33,8 @@ from pump_friction_ros.messages.conversions import (
 )
 from pump_friction_ros.table.friction_table import build_table
 import pytest
+
+from .conftest import level_from_msg
 
 try:
     from rosbags.typesys import get_typestore, Stores

@@ -33,6 +33,7 @@ from ..core.inputs import Defect, InputSpec
 
 __all__ = [
     'DIAGNOSTICS_QOS_DEPTH',
+    'OUTPUTS',
     'OUTPUT_QOS_DEPTH',
     'OUTPUT_TOPICS',
     'RELIABLE_INPUT_QOS_DEPTH',
@@ -41,7 +42,6 @@ __all__ = [
     'float64_cdr',
     'input_sample',
     'joint_sample',
-    'level_from_msg',
     'level_to_msg',
     'outputs_of',
     'rosbags_types',
@@ -49,8 +49,20 @@ __all__ = [
     'stamp_to_ns',
 ]
 
-OUTPUT_TOPICS = ('expected_torque', 'friction_torque', 'efficiency', 'residual',
-                 'valve_plate_friction_scale')
+OUTPUTS = (
+    ('expected_torque', 'expected_nm', False),
+    ('friction_torque', 'friction_nm', False),
+    ('efficiency', 'efficiency', True),
+    ('residual', 'residual_nm', True),
+    ('valve_plate_friction_scale', 'valve_plate_scale', False),
+)
+"""
+The node's Float64 outputs: (topic, `Estimate` field, published only where finite).
+
+Efficiency is undefined near zero speed or pressure and the residual needs a fresh measured
+torque: a NaN is never published as if it were a value.
+"""
+OUTPUT_TOPICS = tuple(topic for topic, _, _ in OUTPUTS)
 """Private topics of the node (``~/<name>``), std_msgs/Float64 each."""
 
 OUTPUT_QOS_DEPTH = 10
@@ -77,10 +89,7 @@ _DOUBLE = struct.Struct('<d')
 
 def outputs_of(estimate: Estimate) -> list[tuple[str, float]]:
     """
-    Topic and value of each output an estimate publishes.
-
-    Efficiency is published only where defined and the residual only with a fresh measured
-    torque: a NaN is never published as if it were a value.
+    Topic and value of each output an estimate publishes (`OUTPUTS`).
 
     Parameters
     ----------
@@ -90,15 +99,15 @@ def outputs_of(estimate: Estimate) -> list[tuple[str, float]]:
     Returns
     -------
     list of (str, float)
-        (topic name from `OUTPUT_TOPICS`, value in SI).
+        (topic name from `OUTPUT_TOPICS`, value in SI), in `OUTPUTS` order; a value that
+        may be undefined is left out where it is not finite.
 
     """
-    out = [('expected_torque', estimate.expected_nm), ('friction_torque', estimate.friction_nm)]
-    if math.isfinite(estimate.efficiency):
-        out.append(('efficiency', estimate.efficiency))
-    if math.isfinite(estimate.residual_nm):
-        out.append(('residual', estimate.residual_nm))
-    out.append(('valve_plate_friction_scale', estimate.valve_plate_scale))
+    out = []
+    for topic, field_name, finite_only in OUTPUTS:
+        value = getattr(estimate, field_name)
+        if not finite_only or math.isfinite(value):
+            out.append((topic, value))
     return out
 
 
@@ -182,26 +191,6 @@ def input_sample(spec: InputSpec, msg: Any, joint_name: str
     if spec.value_field is None:
         return joint_sample(msg, joint_name)
     return float(getattr(msg, spec.value_field)), None, Defect.NONE
-
-
-def level_from_msg(level: Any) -> int:
-    """
-    Return the DiagnosticStatus level as an int, from rclpy (bytes) or rosbags (int).
-
-    Parameters
-    ----------
-    level : bytes or int
-        ``DiagnosticStatus.level``.
-
-    Returns
-    -------
-    int
-        0 OK, 1 WARN, 2 ERROR, 3 STALE.
-
-    """
-    if isinstance(level, (bytes, bytearray)):
-        return level[0]
-    return int(level)
 
 
 def level_to_msg(level: int, status_cls: Any) -> Any:
