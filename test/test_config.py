@@ -144,3 +144,8 @@ def test_every_value_in_the_shipped_parameters_file_has_a_comment():
     for line in lines[start:]:
         if line.strip():
             assert re.match(r'^    \w+: .*\S\s+# \S', line), line
+
+
+def test_zero_viscosity_means_the_pump_files():
+    assert EstimatorConfig(oil_viscosity_m2_s=0.0).viscosity_m2_s(46e-6) == 46e-6
+    assert EstimatorConfig(oil_viscosity_m2_s=68e-6).viscosity_m2_s(46e-6) == 68e-6

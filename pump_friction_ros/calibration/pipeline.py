@@ -143,7 +143,7 @@ def _calibrate(inputs: list[str | Path], base_file: str | Path, pump_out: Staged
     base_file = resolve_path(base_file, '--pump', pump_set=True)  # a path or a set name
     base = load_pump(base_file)
     oil = WaltherViscosity(config.oil_viscosity_40c_m2_s, config.oil_viscosity_100c_m2_s)
-    visc0 = config.oil_viscosity_m2_s or base.oil.viscosity_m2_s
+    visc0 = config.viscosity_m2_s(base.oil.viscosity_m2_s)
     table = build_table(base) if any(Path(p).is_dir() for p in inputs) else None
     parts = []
     for item in map(Path, inputs):

@@ -219,6 +219,23 @@ class EstimatorConfig:
         if self.oil_viscosity_100c_m2_s >= self.oil_viscosity_40c_m2_s:
             raise ConfigError('oil_viscosity_100c_m2_s must be below oil_viscosity_40c_m2_s')
 
+    def viscosity_m2_s(self, pump_file_viscosity_m2_s: float) -> float:
+        """
+        Return the oil viscosity the parameters set: ``oil_viscosity_m2_s``, 0 the pump file's.
+
+        Parameters
+        ----------
+        pump_file_viscosity_m2_s : float
+            The pump file's oil viscosity [m^2/s].
+
+        Returns
+        -------
+        float
+            Kinematic viscosity [m^2/s].
+
+        """
+        return self.oil_viscosity_m2_s or pump_file_viscosity_m2_s
+
 
 @dataclass(frozen=True)
 class ParameterSpec:
