@@ -5,7 +5,8 @@ Inputs arrive as timestamped samples (stamps in integer nanoseconds) through `on
 call per message, whose kinds the table in ``inputs`` lists. Each accepted shaft-speed
 sample triggers an estimate from the latest sample of every other input, provided each is
 within ``max_input_age_s`` of it (sample-and-hold); otherwise no estimate is made and the
-skip is counted.
+skip is counted. The offline replay hands over many messages at once through `on_chunk`
+(``chunk_path``), with exactly the results of `on_input` per message.
 
 Expected input torque = theoretical + friction (table) + J * filtered d(omega)/dt
 + drive loss (opposing the motion), by `model.input_torque_nm`. The derivative is that of
@@ -28,9 +29,12 @@ from dataclasses import dataclass
 import math
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from .config import EstimatorConfig, PressureSource, SpeedSource, TorqueSource, ViscositySource
 from .diagnostics import DiagnosticSnapshot, snapshot
-from .estimate import COUNTERS, Estimate
+from .estimate import COUNTERS, Estimate, EstimateColumns
 from .friction import smooth_sign_scalar
 from .inputs import Defect, InputKind
 from .model import efficiency_of, input_torque_nm, theoretical_torque_nm
@@ -40,6 +44,7 @@ from .params import load_pump
 from .paths import resolve_path
 from .speed_filter import SpeedFilter
 from .table import FrictionTable
+from .table_exact import ExactTableLookup
 from .table_io import cached_table, load_table
 
 __all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
@@ -111,6 +116,7 @@ class TorqueEstimator:
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
         self.monitor = WearMonitor(config)
+        self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
         self._handlers: tuple[Callable[[int, Any, float | None], Estimate | None], ...] = (
@@ -169,6 +175,52 @@ class TorqueEstimator:
             self.counts['rejected_future_stamp'] += 1
             return None
         return self._handlers[kind](stamp_ns, value, torque_nm)
+
+    def on_chunk(self, kinds: ArrayLike, stamps: ArrayLike, log_times: ArrayLike,
+                 values: ArrayLike, torques: ArrayLike, has_value: ArrayLike,
+                 has_torque: ArrayLike, defects: ArrayLike
+                 ) -> tuple[np.ndarray, EstimateColumns]:
+        """
+        Take many input messages at once: exactly `on_input` (or `on_defect`) for each.
+
+        The replay's path (``chunk_path.estimate_chunk``): the same estimates, counters and
+        state as the per-message calls, made with whole-array arithmetic where nothing
+        depends on the order.
+
+        Parameters
+        ----------
+        kinds : array_like of int
+            `InputKind` of each message.
+        stamps : array_like of int
+            Sample times [ns].
+        log_times : array_like of int
+            Receive times [ns] (``receive_ns``).
+        values : array_like of float
+            The value in SI (JointState: the speed), meaningful where ``has_value``.
+        torques : array_like of float
+            JointState only: the measured torque [N m], meaningful where ``has_torque``.
+        has_value, has_torque : array_like of bool
+            ``value`` / ``torque_nm`` is not None.
+        defects : array_like of int
+            `Defect` of each message; 0 for a sample.
+
+        Returns
+        -------
+        tuple
+            Positions in the chunk of the messages that made an estimate (int64 array), and
+            the estimates (`EstimateColumns`: ``rows()`` gives the `Estimate` objects).
+
+        """
+        from .chunk_path import estimate_chunk  # imports this module: imported on first use
+
+        return estimate_chunk(self, kinds, stamps, log_times, values, torques, has_value,
+                              has_torque, defects)
+
+    def _chunk_lookup(self) -> ExactTableLookup:
+        """Return the chunk path's table lookup, made on first use."""
+        if self._lookup is None:
+            self._lookup = ExactTableLookup(self.table)
+        return self._lookup
 
     def on_defect(self, defect: Defect) -> None:
         """

@@ -11,9 +11,9 @@ ROS_MODULES = {'rclpy', 'rcl_interfaces', 'std_msgs', 'sensor_msgs', 'diagnostic
 LAYERS = {  # a module may import modules of its own layer or below
     0: {'__init__', 'units', 'errors', 'paths', 'params', 'kinematics', 'pressure', 'dynamics',
         'friction', 'model', 'paper', 'oil'},
-    1: {'table', 'table_io', 'progress', 'staging'},
+    1: {'table', 'table_exact', 'table_io', 'progress', 'staging'},
     2: {'config', 'inputs', 'estimate', 'speed_filter', 'attribution', 'monitor', 'diagnostics',
-        'estimator',
+        'estimator', 'chunk_path',
         'simulate', 'ros_messages'},
     3: {'node', 'bags', 'samples', 'cli', 'cli_data', 'plots', 'benchmark', 'calibration',
         'evaluation', 'measure_cpu'},
