@@ -181,11 +181,11 @@ def fail_mid_replay(bag, out, conn):
 
     class Exploding(replay.TorqueEstimator):
 
-        def on_input(self, *args):
-            calls.append(1)
-            if len(calls) == 5000:  # the writer and the reader are both running then
+        def on_chunk(self, kinds, *args):
+            calls.extend([1] * len(kinds))  # the replay feeds the core a chunk at a time
+            if len(calls) >= 5000:  # the writer and the reader are both running then
                 raise RuntimeError('core failed')
-            return super().on_input(*args)
+            return super().on_chunk(kinds, *args)
 
     core = replay.estimator_from_config(CONFIG)
     core.__class__ = Exploding
@@ -209,9 +209,9 @@ def test_a_replay_failing_mid_run_stops_both_helpers_by_closing_their_pipes(tmp_
 class SlowCore(replay.TorqueEstimator):
     """A core that takes about 20 s for a 12 s bag: a replay that is surely still running."""
 
-    def on_input(self, *args):
-        time.sleep(0.001)
-        return super().on_input(*args)
+    def on_chunk(self, kinds, *args):
+        time.sleep(0.001 * len(kinds))  # a millisecond per message
+        return super().on_chunk(kinds, *args)
 
 
 def interrupt_a_fleet(bags, out, conn):

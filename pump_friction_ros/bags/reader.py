@@ -171,16 +171,24 @@ class ReadStats:
 
 @dataclass
 class Chunk:
-    """Decoded input events, in bag order (parallel lists, one entry per message)."""
+    """
+    Decoded input events, in bag order (parallel arrays, one entry per message).
 
-    kinds: list[int] = field(default_factory=list)  # `InputKind`
-    stamps: list[int] = field(default_factory=list)  # ns; header stamp or log time
-    log_times: list[int] = field(default_factory=list)  # ns
-    values: list[float] = field(default_factory=list)  # speed / pressure / torque / degC
-    torques: list[float] = field(default_factory=list)  # JointState effort
-    has_value: list[bool] = field(default_factory=list)
-    has_torque: list[bool] = field(default_factory=list)
-    defects: list[int] = field(default_factory=list)  # `Defect`; 0: a sample
+    numpy arrays: they cross the pipe from the reader process as raw buffers, and the core
+    takes them whole (``TorqueEstimator.on_chunk``).
+    """
+
+    kinds: np.ndarray  # int64 `InputKind`
+    stamps: np.ndarray  # int64 ns; header stamp or log time
+    log_times: np.ndarray  # ns; int64 (another dtype only for log times beyond int64)
+    values: np.ndarray  # float64 speed / pressure / torque / degC, where has_value
+    torques: np.ndarray  # float64 JointState effort, where has_torque
+    has_value: np.ndarray  # bool
+    has_torque: np.ndarray  # bool
+    defects: np.ndarray  # int8 `Defect`; 0: a sample
+
+    def __len__(self) -> int:
+        return int(self.kinds.size)
 
 
 class BagInputs:
@@ -377,10 +385,9 @@ class BagInputs:
             kinds[sel] = decoder.spec.kind
             stamps[sel], values[sel], torques[sel] = d.stamps, d.values, d.torques
             has_value[sel], has_torque[sel], defects[sel] = d.has_value, d.has_torque, d.defects
-        return Chunk(kinds=kinds.tolist(), stamps=stamps.tolist(), log_times=list(times),
-                     values=values.tolist(), torques=torques.tolist(),
-                     has_value=has_value.tolist(), has_torque=has_torque.tolist(),
-                     defects=defects.tolist())
+        return Chunk(kinds=kinds, stamps=stamps, log_times=np.asarray(times), values=values,
+                     torques=torques, has_value=has_value, has_torque=has_torque,
+                     defects=defects)
 
     def close(self) -> None:
         """Close the bag."""

@@ -15,10 +15,11 @@
 """
 Offline replay: the node's outputs from a rosbag2 bag, written back to a bag, CSV, plots.
 
-The replay feeds the same ROS-free core as the live node (`TorqueEstimator.on_input`),
-message by message in bag order, with the same timestamps the node would use (header
-stamps, else the receive time, which in a bag is the log time). `replay_events` is the
-loop: a generator of estimates and of the node's diagnostics timer ticks, emulated on bag
+The replay feeds the same ROS-free core as the live node, in bag order, with the same
+timestamps the node would use (header stamps, else the receive time, which in a bag is the
+log time): through ``TorqueEstimator.on_chunk``, the chunk-wise twin of the node's
+``on_input`` (identical results, ``test_chunk_path.py``). `replay_batches` (``events``) is
+the loop: a generator of estimates and of the node's diagnostics timer ticks, emulated on bag
 time (first tick one period after the first message). `replay_bag` writes its outputs; the
 calibration consumes `bag_estimates`. Outputs carry the log time of the message that
 produced them, which is when the node would have published them. For the same message
@@ -28,15 +29,18 @@ node's own conversion path, for every combination of input sources).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import ExitStack
 import csv
 from dataclasses import dataclass, field
 import math
 from pathlib import Path
 import time
-from typing import Any, NamedTuple, TextIO
+from typing import Any, TextIO
 
+import numpy as np
+
+from .events import replay_batches, replay_events, ReplayBatch, ReplayEvent
 from .outputs import CSV_COLUMNS, csv_row
 from .sinks import (
     COMPRESSION_CHOICES,
@@ -49,7 +53,7 @@ from .sinks import (
 )
 from .sources import open_source, ProcessSource, Source
 from ..core.diagnostics import level_message
-from ..core.estimate_record import COUNTERS, Estimate
+from ..core.estimate_record import COUNTERS, Estimate, EstimateColumns, MONITOR_COLUMNS
 from ..core.estimator import estimator_from_config, TorqueEstimator
 from ..core.monitor import ERROR, WARN
 from ..core.node_parameters import EstimatorConfig, NODE_NAME
@@ -59,10 +63,8 @@ from ..physics.model import efficiency_of
 from ..progress import ProgressBar
 from ..staging import looks_like_bag, looks_like_plots, sigint_held, Staged, StagedOutputs
 
-__all__ = ['CSV_COLUMNS', 'ReplayEvent', 'ReplaySummary', 'bag_estimates', 'replay_bag',
-           'replay_events']
-
-_NEVER = 1 << 63
+__all__ = ['CSV_COLUMNS', 'ReplayBatch', 'ReplayEvent', 'ReplaySummary', 'bag_estimates',
+           'replay_bag', 'replay_batches', 'replay_events']
 
 
 @dataclass
@@ -165,62 +167,6 @@ class LevelTracker:
         self.level = 0
 
 
-class ReplayEvent(NamedTuple):
-    """One thing the node would do: publish an estimate, or tick its diagnostics timer."""
-
-    log_ns: int  # when [ns]
-    estimate: Estimate | None  # None: the diagnostics timer fires
-
-
-def replay_events(source: Source, core: TorqueEstimator, tick_period_ns: int | None = None,
-                  progress: Callable[[float], None] | None = None) -> Iterator[ReplayEvent]:
-    """
-    Run a bag's input events through the core, in bag order.
-
-    Parameters
-    ----------
-    source : Source
-        Decoded input events (``sources.open_source``).
-    core : TorqueEstimator
-        The core, fed exactly as the node feeds it.
-    tick_period_ns : int, optional
-        Period of the node's diagnostics timer [ns]; None: no ticks.
-    progress : callable, optional
-        Called with the fraction of messages done after each chunk.
-
-    Yields
-    ------
-    ReplayEvent
-        Each estimate made, and each timer tick, in time order.
-
-    """
-    meta = source.meta
-    next_tick = meta.start_ns + tick_period_ns if tick_period_ns else _NEVER
-    on_input, on_defect = core.on_input, core.on_defect
-    total = max(meta.input_message_count, 1)
-    done = 0
-    for chunk in source.chunks():
-        for kind, stamp, log_ns, value, torque, has_value, has_torque, defect in zip(
-                chunk.kinds, chunk.stamps, chunk.log_times, chunk.values, chunk.torques,
-                chunk.has_value, chunk.has_torque, chunk.defects, strict=True):
-            while next_tick <= log_ns:
-                yield ReplayEvent(next_tick, None)
-                next_tick += tick_period_ns  # type: ignore[operator]
-            if defect:
-                on_defect(defect)
-                continue
-            est = on_input(kind, stamp, value if has_value else None,
-                           torque if has_torque else None, log_ns)
-            if est is not None:
-                yield ReplayEvent(log_ns, est)
-        done += len(chunk.kinds)
-        if progress is not None:
-            progress(min(done / total, 1.0))
-    while next_tick <= meta.end_ns:
-        yield ReplayEvent(next_tick, None)
-        next_tick += tick_period_ns  # type: ignore[operator]
-
-
 def bag_estimates(bag: str | Path, config: EstimatorConfig, core: TorqueEstimator,
                   remaps: dict[str, str] | None = None) -> Iterator[Estimate]:
     """
@@ -245,9 +191,9 @@ def bag_estimates(bag: str | Path, config: EstimatorConfig, core: TorqueEstimato
     """
     source = open_source(bag, config, remaps)
     try:
-        for event in replay_events(source, core):
-            if event.estimate is not None:
-                yield event.estimate
+        for _, estimates in replay_batches(source, core):
+            if estimates is not None:
+                yield from estimates.rows()
     finally:
         source.close()
 
@@ -266,25 +212,29 @@ class _Series:
         self._min_speed = cfg.monitor_min_speed_rad_s
         self._max_accel = cfg.monitor_max_accel_rad_s2
 
-    def add(self, est: Estimate, start_ns: int) -> None:
-        mon = self._core.monitor
+    def add(self, estimates: EstimateColumns, which: np.ndarray, start_ns: int) -> None:
+        """Add the rows ``which`` (indices) of a batch: the published estimates."""
         table = self._core.table
-        sign = 1.0 if est.speed_rad_s >= 0.0 else -1.0
-        monitored = (abs(est.speed_rad_s) >= self._min_speed
-                     and abs(est.accel_rad_s2) <= self._max_accel
-                     and math.isfinite(est.residual_nm))
-        measured_eff = efficiency_of(est.theoretical_nm, est.measured_nm - est.inertia_nm,
-                                     est.speed_rad_s, est.pressure_diff_pa,
-                                     table.efficiency_min_speed_rad_s,
-                                     table.efficiency_min_pressure_pa) \
-            if math.isfinite(est.measured_nm) else math.nan
-        row = ((est.stamp_ns - start_ns) * 1e-9, est.expected_nm, est.measured_nm,
-               est.residual_nm * sign, float(monitored), mon.cusum_pos_nm_s,
-               mon.cusum_neg_nm_s, est.valve_plate_scale, est.valve_plate_scale_std,
-               mon.theta_rest, mon.rest_scale_std, est.efficiency, measured_eff,
-               float(est.theoretical_nm * est.speed_rad_s > 0.0), est.level)
-        for key, value in zip(self.KEYS, row, strict=True):
-            self.data[key].append(value)
+        monitor = estimates.monitor
+        for est, cusum_pos, cusum_neg, other, other_std in zip(
+                estimates.rows(which), *(monitor[k][which].tolist() for k in MONITOR_COLUMNS),
+                strict=True):
+            sign = 1.0 if est.speed_rad_s >= 0.0 else -1.0
+            monitored = (abs(est.speed_rad_s) >= self._min_speed
+                         and abs(est.accel_rad_s2) <= self._max_accel
+                         and math.isfinite(est.residual_nm))
+            measured_eff = efficiency_of(est.theoretical_nm, est.measured_nm - est.inertia_nm,
+                                         est.speed_rad_s, est.pressure_diff_pa,
+                                         table.efficiency_min_speed_rad_s,
+                                         table.efficiency_min_pressure_pa) \
+                if math.isfinite(est.measured_nm) else math.nan
+            row = ((est.stamp_ns - start_ns) * 1e-9, est.expected_nm, est.measured_nm,
+                   est.residual_nm * sign, float(monitored), cusum_pos, cusum_neg,
+                   est.valve_plate_scale, est.valve_plate_scale_std, other, other_std,
+                   est.efficiency, measured_eff,
+                   float(est.theoretical_nm * est.speed_rad_s > 0.0), est.level)
+            for key, value in zip(self.KEYS, row, strict=True):
+                self.data[key].append(value)
 
 
 def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
@@ -369,7 +319,7 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
             csv_file = stack.enter_context(open(table.path, 'w', newline='')) if table \
                 else None
             series = _run(source, core, config, summary, sink, csv_file, keep_estimates,
-                          progress)
+                          progress, figs is not None)
         if summary.estimates == 0:  # every sample skipped: say why rather than write nothing
             raise BagError(_no_estimate_message(summary, core))
         if sink is not None:
@@ -424,8 +374,12 @@ def _no_estimate_message(summary: ReplaySummary, core: TorqueEstimator) -> str:
 
 def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
          summary: ReplaySummary, sink: Sink | None, csv_file: TextIO | None, keep_estimates: bool,
-         progress: bool) -> _Series:
-    """Consume `replay_events`: outputs, CSV rows, level intervals, the summary."""
+         progress: bool, plots: bool) -> _Series:
+    """
+    Consume `replay_batches`: outputs, CSV rows, level intervals, the summary.
+
+    The diagnostics timer ticks only where they are written (the output bag).
+    """
     from rosbags.typesys import get_typestore, Stores
 
     typestore = get_typestore(Stores.ROS2_JAZZY)
@@ -441,28 +395,36 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     kept: list[Estimate] = []
     last_stamp = start_ns
     write = sink.write if sink is not None else None
+    period = round(1e9 / config.diagnostics_rate_hz) if write is not None else None
     with ProgressBar(f'replay {Path(summary.bag).name}', enabled=progress) as bar:
-        for log_ns, est in replay_events(source, core, round(1e9 / config.diagnostics_rate_hz),
-                                         bar):
-            if est is None:  # the node's diagnostics timer
+        for log_ns, estimates in replay_batches(source, core, period, bar):
+            if estimates is None:  # the node's diagnostics timer
                 if write is not None:
-                    msg = diagnostic_array(types, core.diagnostics(log_ns), log_ns,
-                                           status_name, config.hardware_id)
-                    write(DIAGNOSTICS_INDEX, log_ns, bytes(typestore.serialize_cdr(
+                    tick = log_ns[0]
+                    msg = diagnostic_array(types, core.diagnostics(tick), tick, status_name,
+                                           config.hardware_id)
+                    write(DIAGNOSTICS_INDEX, tick, bytes(typestore.serialize_cdr(
                         msg, 'diagnostic_msgs/msg/DiagnosticArray')))
                 continue
-            last_stamp = est.stamp_ns
-            levels.update(est.level, est.stamp_ns)
-            if keep_estimates:
-                kept.append(est)
-            if rows is not None:
-                rows.writerow(csv_row(est, start_ns))
-            if est.publish:
-                summary.published += 1
-                if write is not None:
+            stamps = estimates.column('stamp_ns')
+            last_stamp = int(stamps[-1])
+            level = estimates.column('level')
+            for i in np.flatnonzero(level != np.append(levels.level, level[:-1])).tolist():
+                levels.update(int(level[i]), int(stamps[i]))
+            if keep_estimates or rows is not None:
+                every = estimates.rows()
+                kept.extend(every if keep_estimates else ())
+                if rows is not None:
+                    rows.writerows(csv_row(est, start_ns) for est in every)
+            published = np.flatnonzero(estimates.column('publish'))
+            summary.published += published.size
+            if write is not None:
+                for i, est in zip(published.tolist(), estimates.rows(published), strict=True):
+                    t = log_ns[i]
                     for name, v in outputs_of(est):
-                        write(OUTPUT_INDEX[name], log_ns, float64_cdr(v))
-                series.add(est, start_ns)
+                        write(OUTPUT_INDEX[name], t, float64_cdr(v))
+            if plots:
+                series.add(estimates, published, start_ns)
     levels.finish(last_stamp)
     stats = source.stats()
     summary.duration_s = (meta.end_ns - start_ns) * 1e-9

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.estimator import TEMPERATURE_RANGE_C
+from ..core.inputs import TEMPERATURE_RANGE_C
 from ..core.node_parameters import EstimatorConfig
 from ..errors import CalibrationError, quote
 from ..physics.oil import WaltherViscosity

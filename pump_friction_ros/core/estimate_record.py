@@ -16,9 +16,12 @@
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
-__all__ = ['COUNTERS', 'Estimate']
+import numpy as np
+
+__all__ = ['COUNTERS', 'MONITOR_COLUMNS', 'Estimate', 'EstimateColumns']
 
 COUNTERS = ('estimates', 'stale_skips', 'rejected_non_finite', 'rejected_out_of_order',
             'rejected_duplicate', 'rejected_out_of_range', 'rejected_future_stamp',
@@ -53,3 +56,102 @@ class Estimate(NamedTuple):
     level: int
     table_flags: int
     publish: bool  # output decimation: publish this one
+
+
+_new_estimate = partial(tuple.__new__, Estimate)
+
+
+MONITOR_COLUMNS = ('cusum_pos_nm_s', 'cusum_neg_nm_s', 'other_scale', 'other_scale_std')
+"""The wear monitor's state after each estimate that `EstimateColumns` carries besides the
+fields (the replay's plots draw them)."""
+
+
+class EstimateColumns:
+    """
+    Estimates made one after the other, column by column: what the chunk path returns.
+
+    One numpy array per `Estimate` field, in field order (``components_nm``: four arrays,
+    ``COMPONENTS`` order), all of one length, and the monitor's state after each estimate
+    (`MONITOR_COLUMNS`). Rows become `Estimate` objects only when asked for (`rows`): the
+    replay reads most fields as columns.
+
+    Parameters
+    ----------
+    columns : list of ndarray
+        The 22 columns: the fields, the components spread.
+    monitor : dict of ndarray
+        The `MONITOR_COLUMNS`, one value per estimate.
+
+    """
+
+    def __init__(self, columns: list[np.ndarray], monitor: dict[str, np.ndarray]) -> None:
+        if len(columns) != len(Estimate._fields) + 3 or set(monitor) != set(MONITOR_COLUMNS):
+            raise ValueError('expected a column per Estimate field (four components) and the '
+                             f'monitor columns {MONITOR_COLUMNS}')
+        self.columns = columns
+        self.monitor = monitor
+
+    @classmethod
+    def from_rows(cls, rows: list[Estimate], monitor: dict[str, list[float]]
+                  ) -> EstimateColumns:
+        """
+        Return the columns of `Estimate` objects.
+
+        Parameters
+        ----------
+        rows : list of Estimate
+            The estimates.
+        monitor : dict of list
+            The `MONITOR_COLUMNS`, one value per estimate.
+
+        Returns
+        -------
+        EstimateColumns
+            Whose `rows` are equal to ``rows``.
+
+        """
+        n = len(Estimate._fields) + 3
+        flat = [(*row[:5], *row[5], *row[6:]) for row in rows]
+        columns = [np.asarray(col) for col in zip(*flat, strict=True)] if flat else \
+            [np.empty(0) for _ in range(n)]
+        return cls(columns, {k: np.asarray(monitor[k], dtype=float) for k in MONITOR_COLUMNS})
+
+    def __len__(self) -> int:
+        return int(self.columns[0].size)
+
+    def column(self, name: str) -> np.ndarray:
+        """
+        Return the values of one field, an array (not for ``components_nm``).
+
+        Parameters
+        ----------
+        name : str
+            An `Estimate` field.
+
+        Returns
+        -------
+        ndarray
+            Its values, one per estimate.
+
+        """
+        index = Estimate._fields.index(name)
+        return self.columns[index if index < 5 else index + 3]
+
+    def rows(self, which: np.ndarray | slice | None = None) -> list[Estimate]:
+        """
+        Return estimates as `Estimate` objects, with Python numbers as the scalar path's.
+
+        Parameters
+        ----------
+        which : ndarray or slice, optional
+            Which rows (indices, mask or slice); default all.
+
+        Returns
+        -------
+        list of Estimate
+            In order.
+
+        """
+        cols = [c.tolist() if which is None else c[which].tolist() for c in self.columns]
+        rows = [*cols[:5], list(zip(*cols[5:9], strict=True)), *cols[9:]]
+        return list(map(_new_estimate, zip(*rows, strict=True)))

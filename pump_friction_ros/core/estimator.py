@@ -19,7 +19,8 @@ Inputs arrive as timestamped samples (stamps in integer nanoseconds) through `on
 call per message, whose kinds the table in ``inputs`` lists. Each accepted shaft-speed
 sample triggers an estimate from the latest sample of every other input, provided each is
 within ``max_input_age_s`` of it (sample-and-hold); otherwise no estimate is made and the
-skip is counted.
+skip is counted. The offline replay hands over many messages at once through `on_chunk`
+(``chunk_path``), with exactly the results of `on_input` per message.
 
 Expected input torque = theoretical + friction (table) + J * filtered d(omega)/dt
 + drive loss (opposing the motion), by `model.input_torque_nm`. The derivative is that of
@@ -42,9 +43,21 @@ from dataclasses import dataclass
 import math
 from typing import Any
 
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .chunk_path import estimate_chunk
 from .diagnostics import DiagnosticSnapshot, snapshot
-from .estimate_record import COUNTERS, Estimate
-from .inputs import Defect, InputKind
+from .estimate_record import COUNTERS, Estimate, EstimateColumns
+from .inputs import (
+    Defect,
+    DEFECT_COUNTER,
+    InputKind,
+    MAX_PRESSURE_PA,
+    MAX_SPEED_RAD_S,
+    MAX_TORQUE_NM,
+    TEMPERATURE_RANGE_C,
+)
 from .monitor import WearMonitor
 from .node_parameters import (
     EstimatorConfig,
@@ -59,22 +72,11 @@ from ..physics.friction import smooth_sign_scalar
 from ..physics.model import efficiency_of, input_torque_nm, theoretical_torque_nm
 from ..physics.oil import WaltherViscosity
 from ..physics.pump_parameters import load_pump
+from ..table.exact_lookup import ExactTableLookup
 from ..table.friction_table import FrictionTable
 from ..table.table_files import cached_table, load_table
 
 __all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
-
-MAX_SPEED_RAD_S = 1.0e4
-"""|speed| above this (95,000 rpm) is not a plausible measurement: rejected."""
-MAX_PRESSURE_PA = 2.0e8
-"""|pressure| above this (2,000 bar) is rejected."""
-MAX_TORQUE_NM = 1.0e4
-"""|torque| above this is rejected."""
-TEMPERATURE_RANGE_C = (-60.0, 250.0)
-"""Oil temperatures outside this range are rejected."""
-_DEFECT_COUNTER = {Defect.MISSING_JOINT: 'rejected_missing_joint',
-                   Defect.MALFORMED: 'rejected_malformed',
-                   Defect.UNDECODABLE: 'rejected_undecodable'}
 
 
 @dataclass
@@ -131,6 +133,7 @@ class TorqueEstimator:
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
         self.monitor = WearMonitor(config)
+        self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
         self._handlers: tuple[Callable[[int, Any, float | None], Estimate | None], ...] = (
@@ -190,6 +193,50 @@ class TorqueEstimator:
             return None
         return self._handlers[kind](stamp_ns, value, torque_nm)
 
+    def on_chunk(self, kinds: ArrayLike, stamps: ArrayLike, log_times: ArrayLike,
+                 values: ArrayLike, torques: ArrayLike, has_value: ArrayLike,
+                 has_torque: ArrayLike, defects: ArrayLike
+                 ) -> tuple[np.ndarray, EstimateColumns]:
+        """
+        Take many input messages at once: exactly `on_input` (or `on_defect`) for each.
+
+        The replay's path (``chunk_path.estimate_chunk``): the same estimates, counters and
+        state as the per-message calls, made with whole-array arithmetic where nothing
+        depends on the order.
+
+        Parameters
+        ----------
+        kinds : array_like of int
+            `InputKind` of each message.
+        stamps : array_like of int
+            Sample times [ns].
+        log_times : array_like of int
+            Receive times [ns] (``receive_ns``).
+        values : array_like of float
+            The value in SI (JointState: the speed), meaningful where ``has_value``.
+        torques : array_like of float
+            JointState only: the measured torque [N m], meaningful where ``has_torque``.
+        has_value, has_torque : array_like of bool
+            ``value`` / ``torque_nm`` is not None.
+        defects : array_like of int
+            `Defect` of each message; 0 for a sample.
+
+        Returns
+        -------
+        tuple
+            Positions in the chunk of the messages that made an estimate (int64 array), and
+            the estimates (`EstimateColumns`: ``rows()`` gives the `Estimate` objects).
+
+        """
+        return estimate_chunk(self, kinds, stamps, log_times, values, torques, has_value,
+                              has_torque, defects)
+
+    def _chunk_lookup(self) -> ExactTableLookup:
+        """Return the chunk path's table lookup, made on first use."""
+        if self._lookup is None:
+            self._lookup = ExactTableLookup(self.table)
+        return self._lookup
+
     def on_defect(self, defect: Defect) -> None:
         """
         Count a message that carried no usable sample.
@@ -200,7 +247,7 @@ class TorqueEstimator:
             Why (a missing joint, malformed arrays, an undecodable bag message).
 
         """
-        self.counts[_DEFECT_COUNTER[Defect(defect)]] += 1
+        self.counts[DEFECT_COUNTER[Defect(defect)]] += 1
 
     def on_joint_state(self, stamp_ns: int, speed_rad_s: float | None,
                        torque_nm: float | None) -> Estimate | None:

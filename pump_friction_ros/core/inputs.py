@@ -34,7 +34,8 @@ from .node_parameters import (
     ViscositySource,
 )
 
-__all__ = ['INPUTS', 'Defect', 'InputKind', 'InputSpec', 'inputs_for']
+__all__ = ['DEFECT_COUNTER', 'INPUTS', 'MAX_PRESSURE_PA', 'MAX_SPEED_RAD_S', 'MAX_TORQUE_NM',
+           'TEMPERATURE_RANGE_C', 'Defect', 'InputKind', 'InputSpec', 'inputs_for']
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 FLUID_PRESSURE = 'sensor_msgs/msg/FluidPressure'
@@ -102,6 +103,20 @@ INPUTS: tuple[InputSpec, ...] = (
               lambda c: c.viscosity_source == ViscositySource.TEMPERATURE),
 )
 """Every input the node can take, in `InputKind` order."""
+
+# Physical plausibility of the samples: beyond these a value is rejected and counted.
+MAX_SPEED_RAD_S = 1.0e4
+"""|speed| above this (95,000 rpm) is not a plausible measurement: rejected."""
+MAX_PRESSURE_PA = 2.0e8
+"""|pressure| above this (2,000 bar) is rejected."""
+MAX_TORQUE_NM = 1.0e4
+"""|torque| above this is rejected."""
+TEMPERATURE_RANGE_C = (-60.0, 250.0)
+"""Oil temperatures outside this range are rejected."""
+DEFECT_COUNTER = {Defect.MISSING_JOINT: 'rejected_missing_joint',
+                  Defect.MALFORMED: 'rejected_malformed',
+                  Defect.UNDECODABLE: 'rejected_undecodable'}
+"""The estimator's counter of each message defect."""
 
 
 def inputs_for(config: EstimatorConfig) -> tuple[InputSpec, ...]:

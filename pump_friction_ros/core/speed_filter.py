@@ -126,6 +126,53 @@ class SpeedFilter:
         self.accel_rad_s2 = (self._lp1 - self._lp2) / self.tau_s
         return self.accel_rad_s2
 
+    def update_many(self, stamps_ns: list[int], speeds_rad_s: list[float]) -> list[float]:
+        """
+        Take many speed samples in order: `update` for each, in one loop (the chunk path).
+
+        The same operations in the same order as `update`, so the results and the state
+        left behind are identical to calling it sample by sample (``test_speed_filter``).
+
+        Parameters
+        ----------
+        stamps_ns : list of int
+            Sample times [ns].
+        speeds_rad_s : list of float
+            Shaft speeds [rad/s].
+
+        Returns
+        -------
+        list of float
+            Filtered acceleration after each sample [rad/s^2].
+
+        """
+        tau, max_gap = self.tau_s, self.max_gap_ns
+        last, step_prev = self._last_ns, self._step_ns
+        lp1, lp2, x_prev, accel = self._lp1, self._lp2, self._x_prev, self.accel_rad_s2
+        b, a, c = self._coefficients
+        out: list[float] = []
+        append = out.append
+        for stamp, x in zip(stamps_ns, speeds_rad_s, strict=True):
+            if last is None or not 0 < stamp - last <= max_gap:
+                lp1 = lp2 = x_prev = x  # (re)start at rest
+                accel = 0.0
+            else:
+                step = stamp - last
+                if step != step_prev:
+                    b, a, c = stage_coefficients(step * 1e-9, tau)
+                    step_prev = step
+                lp1_old = lp1
+                lp1 = b * lp1_old + a * x_prev + c * (x - x_prev)
+                lp2 = b * lp2 + a * lp1_old + c * (lp1 - lp1_old)
+                x_prev = x
+                accel = (lp1 - lp2) / tau
+            last = stamp
+            append(accel)
+        self._last_ns, self._step_ns = last, step_prev
+        self._lp1, self._lp2, self._x_prev, self.accel_rad_s2 = lp1, lp2, x_prev, accel
+        self._coefficients = (b, a, c)
+        return out
+
 
 def filter_two_stage(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
     """
