@@ -111,7 +111,7 @@ class TorqueEstimator:
         self.config = config
         self.table = table
         self.pump_name = pump_name
-        self._viscosity_m2_s = config.oil_viscosity_m2_s or default_viscosity_m2_s
+        self._viscosity_m2_s = config.viscosity_m2_s(default_viscosity_m2_s)
         self._walther = WaltherViscosity(config.oil_viscosity_40c_m2_s,
                                          config.oil_viscosity_100c_m2_s)
         self._max_age_ns = round(config.max_input_age_s * 1e9)
