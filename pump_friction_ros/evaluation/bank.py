@@ -37,8 +37,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .eha_scenarios import draw_eha
+from .eha_settings import EhaSettings
 from .scenarios import Scenario, simulate_scenario, SimulatedScenario
-from .settings import BankSettings, FAMILIES, FAULTS
+from .settings import BankSettings, FAMILIES, Family, FAULTS
+from .true_pump import true_table
 from ..core.attribution import Verdict
 from ..core.estimator import TorqueEstimator
 from ..core.inputs import InputKind
@@ -50,7 +53,7 @@ from ..table.friction_table import FrictionTable
 from ..table.table_files import cached_table
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'build_scenarios',
-           'read_monitor', 'run_bank', 'run_scenario']
+           'prepare_true_tables', 'read_monitor', 'run_bank', 'run_scenario']
 
 _NS = 1_000_000_000
 _CHUNK = 1 << 16  # events converted to Python floats at a time (bounds memory)
@@ -186,20 +189,79 @@ def build_scenarios(settings: BankSettings, seed: int = 0,
     for family in FAMILIES:
         if settings.families is not None and family.name not in settings.families:
             continue
+        size = _Size.of(settings, family)
+        if size is None:
+            continue
         for fault in FAULTS:
-            if settings.faults is not None and fault.name not in settings.faults:
+            if not fault.applies_to(family) or any(
+                    names is not None and fault.name not in names
+                    for names in (settings.faults, size.faults)):
                 continue
             nominal = fault.truth_class == 'nominal'
-            for rep in range(settings.nominal_seeds if nominal else settings.fault_seeds):
-                duration = settings.nominal_duration_s if nominal else settings.fault_duration_s
-                draft = Scenario(family, fault, rep, duration, math.inf, settings.ramp_s, seed,
+            for rep in range(size.nominal_seeds if nominal else size.fault_seeds):
+                duration = size.nominal_duration_s if nominal else size.fault_duration_s
+                draft = Scenario(family, fault, rep, duration, math.inf, size.ramp_s, seed,
                                  config)
-                onset = math.inf if nominal else duration * float(
-                    np.random.default_rng([*draft.seed_key, 1]).uniform(
-                        *settings.onset_fraction))
-                scenarios.append(Scenario(family, fault, rep, duration, onset,
-                                          settings.ramp_s, seed, config))
+                onset = math.inf
+                if not nominal:
+                    rng = np.random.default_rng([*draft.seed_key, 1])
+                    onset = float(rng.uniform(*size.onset_s)) if size.onset_s else \
+                        duration * float(rng.uniform(*settings.onset_fraction))
+                scenarios.append(Scenario(family, fault, rep, duration, onset, size.ramp_s,
+                                          seed, config))
     return scenarios
+
+
+class _Size(NamedTuple):
+    """Run counts and lengths of one family in a bank."""
+
+    nominal_seeds: int
+    nominal_duration_s: float
+    fault_seeds: int
+    fault_duration_s: float
+    ramp_s: float
+    onset_s: tuple[float, float] | None  # absolute; None: the bank's onset fraction
+    faults: tuple[str, ...] | None
+
+    @classmethod
+    def of(cls, settings: BankSettings, family: Family) -> _Size | None:
+        if not family.realistic:
+            return cls(settings.nominal_seeds, settings.nominal_duration_s,
+                       settings.fault_seeds, settings.fault_duration_s, settings.ramp_s, None,
+                       None)
+        eha = settings.eha
+        if eha is None:
+            return None
+        return cls(eha.nominal_seeds, eha.nominal_duration_s, eha.fault_seeds,
+                   eha.fault_duration_s, eha.ramp_s, eha.onset_s, eha.faults)
+
+
+def prepare_true_tables(scenarios: list[Scenario]) -> int:
+    """
+    Build (or load) the true pumps' tables the realistic scenarios need, once.
+
+    Called before the workers start, so that they find the tables in the disk cache
+    instead of each building them.
+
+    Parameters
+    ----------
+    scenarios : list of Scenario
+        The bank's scenarios.
+
+    Returns
+    -------
+    int
+        Distinct true tables.
+
+    """
+    variants = set()
+    for scenario in scenarios:
+        motion = scenario.family.motion
+        if isinstance(motion, EhaSettings):
+            variants.add((draw_eha(scenario).variant, motion.mismatch))
+    for variant, mismatch in variants:
+        true_table(variant, mismatch)
+    return len(variants)
 
 
 def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
@@ -304,7 +366,8 @@ def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,
     if workers < 1:
         raise ValueError('workers must be >= 1')
     scenarios = build_scenarios(settings, seed, config)
-    _pump_and_table()  # build / load the table once, before any worker starts
+    _pump_and_table()  # build / load the tables once, before any worker starts
+    prepare_true_tables(scenarios)
     start, cpu_start = time.perf_counter(), _cpu_s()
     records: list[RunRecord] = []
     if workers == 1 or len(scenarios) <= 1:

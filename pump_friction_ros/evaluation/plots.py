@@ -69,7 +69,8 @@ def _delay_figure(plt, records: Sequence[RunRecord], figures: dict[str, Any]):
     faulty = [r for r in records if r.truth_class != 'nominal']
     finite = [r.delay_s for r in faulty if math.isfinite(r.delay_s)]
     top = 1.15 * max(finite, default=1.0)  # where the runs not detected are drawn
-    steps = [f.name for f in FAULTS if f.truth_class == 'valve_plate' and not f.ramp]
+    steps = [f.name for f in FAULTS
+             if f.truth_class == 'valve_plate' and not f.ramp and not f.intermittent]
     others = [f.name for f in FAULTS if f.truth_class != 'nominal' and f.name not in steps]
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True,
                                       gridspec_kw={'width_ratios': [1, 1.4]})

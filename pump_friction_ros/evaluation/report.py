@@ -135,10 +135,12 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
           (per fault and family; delays inf when too many runs were missed);
         * ``confusion`` (per fault: count per attribution), ``confusion_by_class`` (per
           true class), ``attribution_correct_rate`` (per class), ``vp_attribution_rate``
-          (valve-plate faults attributed to the valve plate);
+          (valve-plate faults attributed to the valve plate), ``vp_attribution_by_family``
+          (the same per family);
         * ``vp_scale_error_median``, ``vp_scale_error_p90_abs``,
           ``other_scale_error_median``, ``other_scale_error_p90_abs``, ``coverage_vp``,
-          ``coverage_other`` (per fault, and 'all').
+          ``coverage_other`` (per fault, and 'all'); ``coverage_vp_by_family`` (all runs of
+          each family).
 
     """
     records = list(records)
@@ -186,6 +188,13 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
         c: _fraction([r.attribution in ACCEPTED_ATTRIBUTIONS[c] for r in records
                       if r.truth_class == c]) for c in classes}
     fig['vp_attribution_rate'] = fig['attribution_correct_rate'].get('valve_plate', math.nan)
+    fig['vp_attribution_by_family'] = {
+        family: _fraction([r.attribution == 'valve_plate' for r in records
+                           if r.truth_class == 'valve_plate' and family in (r.family, 'all')])
+        for family in [*families, 'all']}
+    fig['coverage_vp_by_family'] = {
+        family: _fraction([abs(r.vp_scale - r.vp_truth) <= Z95 * r.vp_std for r in records
+                           if family in (r.family, 'all')]) for family in [*families, 'all']}
     groups = {**by_fault, 'all': records}
     vp_err = {f: [r.vp_scale - r.vp_truth for r in runs] for f, runs in groups.items()}
     other = {f: [r for r in runs if r.other_truth_exact] for f, runs in groups.items()}
@@ -262,6 +271,11 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
         f'{_percent(figures["monitored_fraction"][f])} / '
         f'{_percent(figures["above_min_speed_fraction"][f])}' for f in ['all', *families])]
         + [''] * (len(ATTRIBUTIONS) + 5))
+    for name, key in (('valve-plate faults named vp', 'vp_attribution_by_family'),
+                      ('cov vp, all runs', 'coverage_vp_by_family')):
+        rows.append([name, str(figures['runs']),
+                     *(_percent(figures[key][f]) for f in ['all', *families])]
+                    + [''] * (len(ATTRIBUTIONS) + 5))
     for fault, per_family in figures['delay_p50_s'].items():
         cells = []
         for family in ['all', *families]:

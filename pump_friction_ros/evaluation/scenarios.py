@@ -93,6 +93,10 @@ class Scenario:
 
     def estimator_config(self) -> EstimatorConfig:
         """Return the estimator's config (oil temperature input for the warm-up)."""
+        if self.family.realistic:  # the installation's oil, inertia and drive loss
+            from .eha_scenarios import eha_estimator_config
+
+            return eha_estimator_config(self)
         if self.family.uses_temperature:
             return replace(self.config, viscosity_source=ViscositySource.TEMPERATURE)
         return self.config
@@ -299,7 +303,8 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
     scenario : Scenario
         What to simulate.
     table : FrictionTable
-        Friction table of the true pump (the one the estimator uses: the pump as modelled).
+        Friction table the estimator uses; the classic families' true pump (the pump as
+        modelled); the realistic families' truth has its own (``eha_scenarios``).
 
     Returns
     -------
@@ -307,6 +312,10 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
         Measured signals, the truth behind them and the end-of-run truths.
 
     """
+    if scenario.family.realistic:  # closed-loop EHA, real sensors, a true pump of its own
+        from .eha_scenarios import simulate_eha
+
+        return simulate_eha(scenario, table)
     fam, fault, sig = scenario.family, scenario.fault, scenario.family.signals
     config = scenario.config
     rng = np.random.default_rng(scenario.seed_key)
@@ -331,7 +340,7 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
         tt = np.arange(math.ceil(duration * sig.temperature_rate_hz)) / sig.temperature_rate_hz
         temp_true = warm_up_temperature(fam.motion, tt, duration)
     else:
-        visc = np.full(t.size, config.oil_viscosity_m2_s or table.default_viscosity_m2_s)
+        visc = np.full(t.size, config.viscosity_m2_s(table.default_viscosity_m2_s))
     res = table.lookup_array(speed, dp, visc)
     direction = np.tanh(speed / table.zero_speed_threshold_rad_s)
     factors = {c: _factor(fault, f, t, onset, scenario.ramp_s)

@@ -17,15 +17,21 @@ Every number of the monitor evaluation bank, in one place, with its meaning.
 
 Duty-cycle families (`FAMILIES`), faults (`FAULTS`), sensor and load settings
 (`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges ``(low, high)`` are
-drawn uniformly per scenario from its seed. The plant constants that the estimator must
-share with the truth (rotor inertia, nominal drive loss, oil viscosity and its 40 / 100 degC
-law) are not here: they come from the package's node parameters
+drawn uniformly per scenario from its seed. The plant constants that the estimator of the
+classic families must share with the truth (rotor inertia, nominal drive loss, oil viscosity
+and its 40 / 100 degC law) are not here: they come from the package's node parameters
 (``config/torque_estimator.yaml``), so that the estimator is configured as the truth is.
+
+The realistic families (position-controlled EHAs with real sensors, oils, cold starts and a
+true pump that is not the node's model) have their numbers in ``eha_settings``; their
+faults are those with ``scope='eha'`` and their bank size is `BankSettings.eha`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+
+from .eha_settings import EhaSettings, SetpointSettings, TemperatureSettings
 
 __all__ = [
     'ACCEPTED_ATTRIBUTIONS',
@@ -37,6 +43,7 @@ __all__ = [
     'BankSettings',
     'CreepSettings',
     'CruiseSettings',
+    'EhaBankSettings',
     'Family',
     'Fault',
     'HighDynamicsSettings',
@@ -196,7 +203,7 @@ class HighDynamicsSettings:
 
 
 Motion = (TrapezoidSettings | SineSettings | SetpointLagSettings | CruiseSettings
-          | CreepSettings | WarmUpSettings | HighDynamicsSettings)
+          | CreepSettings | WarmUpSettings | HighDynamicsSettings | EhaSettings)
 
 
 @dataclass(frozen=True)
@@ -209,11 +216,19 @@ class Family:
     signals: SignalSettings = field(default_factory=SignalSettings)
 
     @property
+    def realistic(self) -> bool:
+        """Return whether this is a realistic EHA family (``eha_scenarios``; its own sizes)."""
+        return isinstance(self.motion, EhaSettings)
+
+    @property
     def uses_temperature(self) -> bool:
         """Return whether the family feeds oil temperature and runs the estimator on it."""
+        if isinstance(self.motion, EhaSettings):
+            return self.motion.temperature.topic
         return isinstance(self.motion, WarmUpSettings)
 
 
+_COLD = TemperatureSettings(cold_start=True)
 FAMILIES: tuple[Family, ...] = (
     Family('trapezoid', 'trap', TrapezoidSettings()),
     Family('sine', 'sine', SineSettings()),
@@ -222,8 +237,15 @@ FAMILIES: tuple[Family, ...] = (
     Family('creep', 'creep', CreepSettings()),
     Family('warm_up', 'warm', WarmUpSettings()),
     Family('high_dynamics', 'dyn', HighDynamicsSettings()),
+    # realistic EHAs: closed position loop, real sensors, an oil grade, a mismatched pump
+    Family('eha_pick_place', 'eha pnp', EhaSettings(SetpointSettings(pick_place=True))),
+    Family('eha_steps_no_temp', 'eha steps nt', EhaSettings(
+        SetpointSettings(step_probability=0.4), TemperatureSettings(topic=False))),
+    Family('eha_cold_start', 'eha cold', EhaSettings(SetpointSettings(pick_place=True), _COLD)),
+    Family('eha_cold_no_temp', 'eha cold nt', EhaSettings(
+        SetpointSettings(), TemperatureSettings(cold_start=True, topic=False))),
 )
-"""The duty-cycle families, in table order."""
+"""The duty-cycle families, in table order: the classic ones, then the realistic EHAs."""
 
 ATTRIBUTIONS = ('valve_plate', 'other_friction', 'not_friction', 'cannot_tell', 'none')
 """Possible attributions of a monitor reading ('none': no alarm), in table order."""
@@ -232,16 +254,18 @@ ATTRIBUTIONS = ('valve_plate', 'other_friction', 'not_friction', 'cannot_tell', 
 @dataclass(frozen=True)
 class Fault:
     """
-    A fault applied as a step at the scenario's onset (the valve-plate ramp: a ramp).
+    A fault applied as a step at the scenario's onset (or a ramp, or on/off episodes).
 
     Friction factors multiply one friction component of the true pump each; the drive loss
     is added opposing the motion (extra x tanh(speed / zero-speed threshold)); the offset is
-    added to the measured motor torque; the gain multiplies the measured pressure difference.
+    added to the measured motor torque; the gain multiplies the measured pressure difference;
+    the torque gain multiplies the measured motor torque (a torque-constant change).
     """
 
     name: str
     truth_class: str
-    """'nominal', 'valve_plate', 'other_friction', 'drive_loss' or 'not_friction'."""
+    """'nominal', 'valve_plate', 'other_friction', 'drive_loss', 'not_friction' or
+    'measurement' (a change of the torque measurement: not friction)."""
     size: float = 1.0
     """Fault size on the x axis of the delay plot (the factor, the extra torque, the gain)."""
     valve_plate: float = 1.0
@@ -253,13 +277,28 @@ class Fault:
     piston_heads: float = 1.0
     """Friction factor of the piston heads [-]."""
     ramp: bool = False
-    """The valve-plate factor ramps linearly from 1 over `BankSettings.ramp_s`."""
+    """The valve-plate factor (and the torque gain) ramps linearly from 1 over the bank's
+    ``ramp_s``."""
     drive_loss_nm: float = 0.0
     """Extra constant drive loss opposing the motion [N m]."""
     torque_offset_nm: float = 0.0
     """Offset of the measured-torque sensor [N m]."""
     pressure_gain: float = 1.0
     """Gain of the pressure sensor: measured dp = gain x true dp [-]."""
+    torque_gain: float = 1.0
+    """Gain change of the measured motor torque (torque constant) [-] (realistic families)."""
+    intermittent: bool = False
+    """The friction factors apply in on/off episodes from the onset, starting on."""
+    episode_on_s: Range = (20.0, 90.0)
+    """Length of an 'on' episode [s] (intermittent faults)."""
+    episode_off_s: Range = (20.0, 180.0)
+    """Length of an 'off' episode [s] (intermittent faults)."""
+    scope: str = 'classic'
+    """The families the fault is run on: 'classic', 'eha' (the realistic ones) or 'all'."""
+
+    def applies_to(self, family: Family) -> bool:
+        """Return whether the bank runs this fault on ``family``."""
+        return self.scope == 'all' or (self.scope == 'eha') == family.realistic
 
     @property
     def factors(self) -> dict[str, float]:
@@ -269,7 +308,7 @@ class Fault:
 
 
 FAULTS: tuple[Fault, ...] = (
-    Fault('nominal', 'nominal'),
+    Fault('nominal', 'nominal', scope='all'),
     Fault('valve_plate_x1.2', 'valve_plate', 1.2, valve_plate=1.2),
     Fault('valve_plate_x1.6', 'valve_plate', 1.6, valve_plate=1.6),
     Fault('valve_plate_x2.0', 'valve_plate', 2.0, valve_plate=2.0),
@@ -279,6 +318,15 @@ FAULTS: tuple[Fault, ...] = (
     Fault('drive_loss_+0.2nm', 'drive_loss', 0.2, drive_loss_nm=0.2),
     Fault('torque_offset_+0.2nm', 'not_friction', 0.2, torque_offset_nm=0.2),
     Fault('pressure_gain_1.05', 'not_friction', 1.05, pressure_gain=1.05),
+    # the realistic families' faults (issue #17, point 6)
+    Fault('valve_plate_x1.4', 'valve_plate', 1.4, valve_plate=1.4, scope='eha'),
+    Fault('valve_plate_x1.8', 'valve_plate', 1.8, valve_plate=1.8, scope='eha'),
+    Fault('valve_plate_ramp_1.6', 'valve_plate', 1.6, valve_plate=1.6, ramp=True, scope='eha'),
+    Fault('valve_plate_intermittent_1.8', 'valve_plate', 1.8, valve_plate=1.8,
+          intermittent=True, scope='eha'),
+    Fault('bearing_x2.0', 'other_friction', 2.0, bearing=2.0, scope='eha'),
+    Fault('torque_constant_-5%', 'measurement', 0.95, torque_gain=0.95, ramp=True,
+          scope='eha'),
 )
 """The faults, in table order; the first is the nominal pump."""
 
@@ -287,11 +335,32 @@ ACCEPTED_ATTRIBUTIONS: dict[str, frozenset[str]] = {
     'valve_plate': frozenset({'valve_plate'}),
     'other_friction': frozenset({'other_friction'}),
     'not_friction': frozenset({'not_friction'}),
+    'measurement': frozenset({'not_friction'}),  # the monitor's word for any non-friction
     # a drive loss may fairly read as other friction or as not friction: wrong only if the
     # valve plate is named (or nothing is)
     'drive_loss': frozenset({'other_friction', 'not_friction', 'cannot_tell'}),
 }
 """Final attributions counted as correct, per true fault class."""
+
+
+@dataclass(frozen=True)
+class EhaBankSettings:
+    """Size of the realistic families' part of a bank (their runs are longer)."""
+
+    nominal_seeds: int
+    """Nominal runs per family."""
+    nominal_duration_s: float
+    """Length of a nominal run [s]."""
+    fault_seeds: int
+    """Runs per family and fault."""
+    fault_duration_s: float
+    """Length of a fault run [s]."""
+    ramp_s: float
+    """Duration of the ramp faults (valve plate, torque constant) [s]."""
+    onset_s: Range
+    """The fault starts at a time drawn in this range [s]."""
+    faults: tuple[str, ...] | None = None
+    """Only these faults on the realistic families (None: all that apply)."""
 
 
 @dataclass(frozen=True)
@@ -315,14 +384,24 @@ class BankSettings:
     """Only these families (None: all)."""
     faults: tuple[str, ...] | None = None
     """Only these faults (None: all)."""
+    eha: EhaBankSettings | None = None
+    """Size of the realistic families (None: they are left out)."""
 
 
 QUICK = BankSettings('quick', nominal_seeds=2, nominal_duration_s=150.0, fault_seeds=1,
-                     fault_duration_s=150.0, ramp_s=40.0)
-"""The test-suite bank: about a minute on 2 cores (~3.2 h simulated, 0.58 h nominal)."""
+                     fault_duration_s=150.0, ramp_s=40.0,
+                     eha=EhaBankSettings(1, 150.0, 1, 150.0, ramp_s=40.0, onset_s=(60.0, 90.0),
+                                         faults=('nominal', 'valve_plate_x1.8')))
+"""
+The test-suite bank: about a minute and a half on 2 cores: the classic families (~3.2 h
+simulated, 0.58 h nominal) and 8 runs of 150 s of the realistic ones."""
 
 FULL = BankSettings('full', nominal_seeds=6, nominal_duration_s=900.0, fault_seeds=5,
-                    fault_duration_s=600.0, ramp_s=180.0)
+                    fault_duration_s=600.0, ramp_s=180.0,
+                    eha=EhaBankSettings(3, 3600.0, 3, 2700.0, ramp_s=600.0,
+                                        onset_s=(1800.0, 1860.0)))
 """
-The benchmark bank: 7 x 6 x 900 s = 10.5 h of nominal running, 7 x 9 x 5 x 600 s = 52.5 h
-of fault runs (half of it before the onset)."""
+The benchmark bank: classic families 7 x 6 x 900 s = 10.5 h of nominal running,
+7 x 9 x 5 x 600 s = 52.5 h of fault runs (half of it before the onset); realistic families
+4 x 3 x 1 h = 12 h of nominal running, 4 x 6 x 3 x 45 min = 54 h of fault runs, each with
+30-31 min of nominal running before the onset (36 h in all)."""

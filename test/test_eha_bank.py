@@ -1,0 +1,266 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Realistic EHA families of the evaluation bank: closed loop, sensors, true pump, streams."""
+
+from dataclasses import replace
+import math
+
+import numpy as np
+from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.evaluation.bank import _feed, base_config, build_scenarios
+from pump_friction_ros.evaluation.closed_loop import Plant, Setpoints, simulate_closed_loop
+from pump_friction_ros.evaluation.eha_scenarios import (
+    draw_eha,
+    eha_estimator_config,
+    fault_factor,
+)
+from pump_friction_ros.evaluation.eha_settings import SensorSettings
+from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario
+from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
+from pump_friction_ros.evaluation.settings import FAMILIES, FAULTS, FULL, QUICK
+from pump_friction_ros.evaluation.true_pump import PumpVariant, true_table
+from pump_friction_ros.physics.friction import valve_plate_viscous_torque_nm
+from pump_friction_ros.physics.model import COMPONENTS
+from pump_friction_ros.physics.oil import WaltherViscosity
+from pump_friction_ros.physics.pump_parameters import load_pump
+from pump_friction_ros.table.table_files import cached_table
+import pytest
+
+FAMILY = {f.name: f for f in FAMILIES}
+FAULT = {f.name: f for f in FAULTS}
+CONFIG = base_config()
+V_G = 4.898e-6  # the paper pump's displacement [m^3], 5 x pi/4 x 9.5^2 mm^2 x 13.82 mm
+QUIET = SensorSettings(pressure_noise_pa=(0.0, 0.0), pressure_offset_pa=(0.0, 0.0),
+                       torque_constant_error=(0.02, 0.02), torque_drift_probability=0.0,
+                       torque_offset_nm=(0.01, 0.01), torque_noise_nm=(0.0, 0.0),
+                       ripple_fraction=(0.0, 0.0), drop_probability=(0.0, 0.0),
+                       burst_rate_per_h=(0.0, 0.0), duplicate_probability=(0.0, 0.0))
+
+
+def plant(**kw):
+    base = {'displacement_m3': V_G, 'area_m2': 1.2e-3, 'stroke_m': 0.3,
+            'leakage_m3_s_pa': 0.0, 'mass_kg': 400.0, 'payload_kg': 0.0, 'gravity_sine': 0.5,
+            'gravity_m_s2': 9.81, 'spring_n_m': 2.0e4, 'damping_n_s_m': 3.0e3,
+            'position_gain_1_s': 20.0, 'integral_gain_1_s2': 0.0,
+            'integral_limit_rad_s': 50.0, 'velocity_feedforward': False,
+            'speed_bandwidth_rad_s': 2 * math.pi * 80.0, 'slew_rad_s2': 2.0e4,
+            'max_speed_rad_s': 900.0, 'step_s': 1e-4}
+    base.update(kw)
+    return Plant(**base)
+
+
+def hold(p, n, position_m, payload_kg=0.0):
+    return Setpoints(np.full(n, position_m), np.zeros(n), np.full(n, payload_kg), 1)
+
+
+def scenario(family, fault='nominal', duration_s=40.0, onset_s=20.0, sensors=QUIET):
+    fam = FAMILY[family]
+    if sensors is not None:
+        fam = replace(fam, motion=replace(fam.motion, sensors=sensors))
+    return Scenario(fam, FAULT[fault], 0, duration_s, onset_s, 10.0, 0, CONFIG)
+
+
+# -- the closed loop against closed forms -----------------------------------------------------
+
+def test_a_small_step_is_reached_with_the_loops_time_constant():
+    # P loop Kp around a first-order speed loop w_b / (s + w_b): x / x_sp has the poles of
+    # s^2 + w_b s + Kp w_b = 0, so the step response is 1 - (p2 e^(p1 t) - p1 e^(p2 t)) / (p2 - p1)
+    p = plant(slew_rad_s2=1e7)  # a slew this high does not bind: the linear loop
+    kp, wb = p.position_gain_1_s, p.speed_bandwidth_rad_s
+    root = math.sqrt(wb * wb - 4.0 * kp * wb)
+    p1, p2 = (-wb + root) / 2.0, (-wb - root) / 2.0
+    t = np.arange(4000) * p.step_s
+    closed = 1.0 - (p2 * np.exp(p1 * t) - p1 * np.exp(p2 * t)) / (p2 - p1)
+    start, target = 0.15, 0.152
+    run = simulate_closed_loop(p, hold(p, t.size, target), start_m=start)
+    np.testing.assert_allclose((run.position_m - start) / (target - start), closed, atol=0.01)
+    reached = np.argmax(run.position_m - start >= (1.0 - math.exp(-1.0)) * (target - start))
+    assert reached * p.step_s == pytest.approx(1.0 / kp, rel=0.1)  # the position loop's 1/Kp
+    assert abs(run.position_m[-1] - target) < 1e-6  # no leakage: no steady-state error
+
+
+def test_static_pressure_is_the_load_over_the_area():
+    p = plant(gravity_sine=-0.8, spring_n_m=5.0e4)
+    for position, payload in ((0.1, 0.0), (0.27, 150.0)):
+        run = simulate_closed_loop(p, hold(p, 2000, position, payload), start_m=position)
+        force = (400.0 + payload) * 9.81 * -0.8 + 5.0e4 * (position - 0.15)
+        np.testing.assert_allclose(run.pressure_diff_pa, force / 1.2e-3, rtol=1e-12)
+        assert np.all(run.speed_rad_s == 0.0)
+
+
+def test_the_cylinder_moves_by_the_integral_of_the_pump_flow():
+    fam = FAMILY['eha_pick_place']
+    scen = Scenario(fam, FAULT['nominal'], 3, 60.0, math.inf, 10.0, 0, CONFIG)
+    d = draw_eha(scen)
+    p = replace(d.plant, leakage_m3_s_pa=1e-13)
+    from pump_friction_ros.evaluation.closed_loop import make_setpoints
+    sp = make_setpoints(fam.motion.setpoints, p, 60000, np.random.default_rng(1))
+    run = simulate_closed_loop(p, sp)
+    flow = V_G * run.speed_rad_s / (2 * math.pi) - 1e-13 * run.pressure_diff_pa  # [m^3/s]
+    volume = np.concatenate([[0.0], np.cumsum(0.5 * (flow[1:] + flow[:-1]) * 1e-3)])
+    gap = run.position_m - run.position_m[0] - volume / p.area_m2
+    assert np.abs(gap).max() < 2e-4 * p.stroke_m  # the trapezoid rule's error, not drift
+    assert np.ptp(run.position_m) > 0.3 * p.stroke_m  # it did move
+    assert run.position_m.min() >= 0.0 and run.position_m.max() <= p.stroke_m
+    np.testing.assert_allclose(np.gradient(run.position_m, 1e-3)[1:-1],
+                               run.cylinder_speed_m_s[1:-1], atol=0.02)
+    # pressure follows the load: dp A = m a + c v + k (x - mid) + m g s
+    m = p.mass_kg + sp.payload_kg
+    a = p.metres_per_rad * run.accel_rad_s2
+    force = m * (a + 9.81 * p.gravity_sine) + p.damping_n_s_m * run.cylinder_speed_m_s + \
+        p.spring_n_m * (run.position_m - p.mid_m)
+    np.testing.assert_allclose(run.pressure_diff_pa * p.area_m2, force, rtol=1e-9, atol=1e-6)
+
+
+# -- the true pump --------------------------------------------------------------------------
+
+def test_a_thinner_film_adds_couette_shear_and_coulomb_factors_scale_breakaway():
+    params = load_pump(None)
+    node = cached_table(params)
+    thin = true_table(PumpVariant(film_clearance=0.8))
+    sticky = true_table(PumpVariant(valve_plate_coulomb=1.2, bearing_f0=1.2))
+    speed, dp, nu = 500.0, 150e5, 46e-6
+    vp = COMPONENTS.index('valve_plate')
+    base = node.lookup_array(speed, dp, nu)['valve_plate_nm'][0]
+    viscous = valve_plate_viscous_torque_nm(speed, nu, params.oil.density_kg_m3,
+                                            params.valve_plate)
+    # 1/h: at 0.8 h the shear is 1.25 x; the coulomb part does not depend on h
+    assert thin.lookup_array(speed, dp, nu)['valve_plate_nm'][0] - base == pytest.approx(
+        0.25 * viscous, rel=0.01)
+    # at rest there is no shear: the valve plate's torque is its coulomb part, x 1.2
+    rest_node = node.magnitudes(0.0, dp, nu, False)[0][vp]
+    assert sticky.magnitudes(0.0, dp, nu, False)[0][vp] == pytest.approx(1.2 * rest_node,
+                                                                         rel=1e-9)
+    assert thin.viscosity_axis_m2_s[-1] == pytest.approx(450e-6)  # cold oil is in the table
+    assert node.viscosity_axis_m2_s[-1] == pytest.approx(100e-6)
+
+
+# -- sensors and message streams ------------------------------------------------------------
+
+def test_measured_torque_is_gain_times_the_delivered_torque_plus_offset():
+    scen = scenario('eha_pick_place', 'valve_plate_x1.8')
+    sim = simulate_scenario(scen, cached_table(load_pump(None)))
+    d = draw_eha(scen)
+    truth = true_table(d.variant).lookup_array(sim.true_speed_rad_s, sim.true_pressure_diff_pa,
+                                               sim.true_viscosity_m2_s)
+    after = sim.t_s >= 20.0
+    friction = sum(truth[f'{c}_nm'] * (np.where(after, 1.8, 1.0) if c == 'valve_plate' else 1.0)
+                   for c in COMPONENTS)
+    v_g = load_pump(None).geometry.displacement_m3
+    delivered = v_g * sim.true_pressure_diff_pa / (2 * math.pi) + friction + \
+        d.rotor_inertia_kg_m2 * sim.true_accel_rad_s2 + \
+        d.drive_loss_nm * np.tanh(sim.true_speed_rad_s / 2.0)
+    np.testing.assert_allclose(sim.torque_nm, 1.02 * delivered + 0.01, rtol=1e-9, atol=1e-9)
+    assert sim.t_s.size == 40000 and np.all(np.diff(sim.t_s) > 0)  # no drops, no duplicates
+    # the node is told the installation's J to +-10 % and its drive loss
+    config = scen.estimator_config()
+    assert abs(config.rotor_inertia_kg_m2 / d.rotor_inertia_kg_m2 - 1.0) <= 0.1
+    assert 5e-4 <= d.rotor_inertia_kg_m2 <= 1e-3
+    assert config.drive_loss_torque_nm == d.drive_loss_nm
+
+
+def test_encoder_speed_is_quantised_and_keeps_the_angle():
+    t = np.arange(5000) * 1e-3
+    angle = 37.0 * t + 0.2 * np.sin(3.0 * t)
+    speed = encoder_speed(angle, 4096, 1e-3, 0.3)
+    q = 2 * math.pi / (4096 * 1e-3)
+    np.testing.assert_allclose(speed / q, np.round(speed / q), atol=1e-9)
+    counted = np.sum(speed[1:]) * 1e-3  # the counted angle, within one count of the truth
+    assert abs(counted - (angle[-1] - angle[0])) <= 2 * math.pi / 4096 + 1e-12
+
+
+def test_dropouts_bursts_and_duplicates_as_counted_streams():
+    rng = np.random.default_rng(4)
+    t = np.arange(200000) * 1e-3
+    windows = np.array([[10.0, 10.25], [100.0, 100.1]])
+    idx = message_indices(t, 0.02, 0.01, windows, rng)
+    unique = np.unique(idx)
+    lost = 200000 - unique.size
+    expected = 250 + 100 + 0.02 * (200000 - 350)
+    assert abs(lost - expected) < 4 * math.sqrt(0.02 * 200000)
+    assert not np.any((t[unique] >= 10.0) & (t[unique] < 10.25))
+    dups = idx.size - unique.size
+    assert abs(dups - 0.01 * unique.size) < 4 * math.sqrt(0.01 * unique.size)
+    assert np.all(np.diff(idx) >= 0)  # in order; a duplicate right after its original
+
+
+def test_the_node_sees_the_duplicates_as_such():
+    noisy = SensorSettings(duplicate_probability=(0.01, 0.01), drop_probability=(0.005, 0.005))
+    scen = scenario('eha_steps_no_temp', sensors=noisy, duration_s=20.0)
+    table = cached_table(load_pump(None))
+    sim = simulate_scenario(scen, table)
+    core = TorqueEstimator(scen.estimator_config(), table, 70e-6, 'x')
+    _feed(core, sim, math.inf)
+    joint = int(np.sum(np.diff(sim.t_s) == 0))
+    pressure = int(np.sum(np.diff(sim.pressure_t_s) == 0))
+    # a JointState duplicate repeats both its speed and its torque sample
+    assert joint > 100 and core.counts['rejected_duplicate'] == 2 * joint + pressure
+    assert np.unique(sim.t_s).size < 20000  # some were lost
+
+
+# -- oils, temperatures, faults --------------------------------------------------------------
+
+def test_cold_start_and_the_nodes_viscosity_with_and_without_the_topic():
+    table = cached_table(load_pump(None))
+    for family, topic in (('eha_cold_start', True), ('eha_cold_no_temp', False)):
+        scen = scenario(family, duration_s=30.0)
+        d = draw_eha(scen)
+        assert 12.0 <= d.temperature_start_c <= 18.0 and 50.0 <= d.temperature_end_c <= 60.0
+        sim = simulate_scenario(scen, table)
+        law = WaltherViscosity(d.oil.viscosity_40c_m2_s, d.oil.viscosity_100c_m2_s)
+        assert sim.true_viscosity_m2_s[0] == pytest.approx(law(d.temperature_start_c), rel=1e-6)
+        assert sim.true_viscosity_m2_s[0] > 100e-6  # beyond the node's table: cold oil
+        config = eha_estimator_config(scen)
+        assert config.oil_viscosity_40c_m2_s == d.oil.viscosity_40c_m2_s
+        if topic:
+            assert config.viscosity_source == 'temperature' and sim.temperature_t_s.size == 300
+        else:
+            assert config.viscosity_source == 'parameter' and sim.temperature_t_s.size == 0
+            assert config.oil_viscosity_m2_s == pytest.approx(law(50.0), rel=1e-12)
+
+
+def test_fault_factors_steps_ramps_and_episodes():
+    t = np.arange(0.0, 1000.0, 0.5)
+    rng = np.random.default_rng(0)
+    ramp = fault_factor(FAULT['torque_constant_-5%'], 0.95, t, 100.0, 600.0, rng)
+    assert np.all(ramp[t <= 100.0] == 1.0) and ramp[t == 400.0][0] == pytest.approx(0.975)
+    assert np.all(ramp[t >= 700.0] == pytest.approx(0.95))
+    fault = FAULT['valve_plate_intermittent_1.8']
+    f = fault_factor(fault, 1.8, t, 100.0, 600.0, rng)
+    assert np.all(f[t < 100.0] == 1.0) and f[t == 100.0][0] == 1.8
+    edges = t[1:][np.diff(f) != 0]  # the onset, then each end of an episode
+    lengths = np.diff(edges)
+    assert np.all(lengths[0::2] >= 20.0 - 0.5) and np.all(lengths[0::2] <= 90.0 + 0.5)
+    assert np.all(lengths[1::2] >= 20.0 - 0.5) and np.all(lengths[1::2] <= 180.0 + 0.5)
+    assert set(np.unique(f)) == {1.0, 1.8}
+
+
+# -- bank sizes -------------------------------------------------------------------------------
+
+def test_bank_sizes_of_the_realistic_families():
+    realistic = [f.name for f in FAMILIES if f.realistic]
+    eha_faults = [f.name for f in FAULTS if f.scope == 'eha']
+    full = [s for s in build_scenarios(FULL) if s.family.realistic]
+    nominal_h = sum(s.duration_s for s in full if s.fault.name == 'nominal') / 3600.0
+    assert nominal_h >= 10.0
+    for family in realistic:
+        for fault in eha_faults:
+            runs = [s for s in full if s.family.name == family and s.fault.name == fault]
+            assert len(runs) >= 3 and all(1800.0 <= s.onset_s <= 1860.0 for s in runs)
+    assert all(s.fault.scope in ('eha', 'all') for s in full)
+    quick = [s for s in build_scenarios(QUICK) if s.family.realistic]
+    assert len(quick) <= 8 and all(s.duration_s <= 180.0 for s in quick)
+    classic = [s for s in build_scenarios(FULL) if not s.family.realistic]
+    assert all(s.fault.scope in ('classic', 'all') for s in classic)
