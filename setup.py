@@ -56,7 +56,7 @@ setup(
     entry_points={
         'console_scripts': [
             'pump_friction = pump_friction_ros.app.cli:main',
-            'torque_estimator = pump_friction_ros.node.torque_estimator:main',
+            'torque_estimator = pump_friction_ros.node.__main__:main',
             'measure_node_cpu = pump_friction_ros.node.measure_cpu:main',
         ],
     },

@@ -51,7 +51,7 @@ def generate_test_description():
     env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='0', RCUTILS_LOGGING_BUFFERED_STREAM='0',
                PYTHONUNBUFFERED='1')
     node = launch.actions.ExecuteProcess(
-        cmd=[sys.executable, '-m', 'pump_friction_ros.node.torque_estimator', '--ros-args',
+        cmd=[sys.executable, '-m', 'pump_friction_ros.node', '--ros-args',
              '--params-file', str(PARAMS)],
         env=env, output='screen')
     return launch.LaunchDescription([node, launch_testing.actions.ReadyToTest()]), {

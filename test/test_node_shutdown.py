@@ -46,7 +46,7 @@ def start_node(table_file, tmp_path):
                ROS_LOG_DIR=str(tmp_path / 'log'))
     env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
     proc = subprocess.Popen(
-        [sys.executable, '-m', 'pump_friction_ros.node.torque_estimator', '--ros-args',
+        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args',
          '--params-file', str(PARAMS), '-p', f'table_file:={table_file}'],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
     seen = b''
@@ -85,3 +85,42 @@ def test_node_exits_0_with_one_line_on_signals(table_file, tmp_path, signals, ga
     stops = [line for line in text.splitlines() if 'stopping' in line]
     assert len(stops) == 1, text
     assert signals[0].name in stops[0]
+
+
+def wait_until_mapped(pid, library, timeout_s=60.0):
+    """Wait until a native library is mapped into a process (it has begun importing it)."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        try:
+            if library in Path(f'/proc/{pid}/maps').read_text():
+                return True
+        except OSError:
+            return False
+        time.sleep(0.001)
+    return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith('linux'), reason='/proc is Linux')
+@pytest.mark.parametrize('delay_s', [0.0, 0.05, 0.2, 0.5])
+def test_a_signal_during_start_up_stops_it_cleanly(table_file, tmp_path, delay_s):
+    """SIGINT while the node imports rclpy and the messages, initialises, builds itself."""
+    env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM='0', PYTHONUNBUFFERED='1',
+               ROS_LOG_DIR=str(tmp_path / 'log'))
+    env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
+         str(PARAMS), '-p', f'table_file:={table_file}'],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    # numpy's core library maps only once the entry point has installed its handler and
+    # begun the heavy imports (a signal before that reaches Python's own start-up)
+    assert wait_until_mapped(proc.pid, '_multiarray_umath')
+    time.sleep(delay_s)
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    text = err.decode(errors='replace')
+    assert proc.returncode == 0, text
+    assert 'Traceback' not in text and 'KeyboardInterrupt' not in text, text
+    assert len([line for line in text.splitlines() if 'stopping on SIGINT' in line]) == 1, text

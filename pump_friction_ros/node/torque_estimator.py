@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import math
-import signal
 import sys
 from typing import Any
 
@@ -51,6 +50,7 @@ from sensor_msgs.msg import FluidPressure, JointState, Temperature
 from std_msgs.msg import Float64, Header
 from std_srvs.srv import Trigger
 
+from .stop_signals import StopSignals
 from ..core.estimate_record import Estimate
 from ..core.estimator import estimator_from_config
 from ..core.inputs import (
@@ -262,52 +262,16 @@ class TorqueEstimatorNode(Node):
         return response
 
 
-class StopSignals:
+def run(args: list[str] | None, stop: StopSignals) -> int:
     """
-    SIGINT and SIGTERM noted, never raised: the node stops through rclpy's own handler.
-
-    rclpy's signal handler (installed by ``rclpy.init``) shuts the context down on SIGINT and
-    SIGTERM, which ends the executor's spin with ``ExternalShutdownException``, and then
-    calls the handler that was there before it: this one. Python's default SIGINT handler
-    would raise ``KeyboardInterrupt`` wherever the main thread is; a second Ctrl-C (a
-    terminal sends one to the process group, launch forwards another) would then cut
-    ``destroy_node`` short with a traceback and exit code -2. Here every signal is only
-    recorded, so the clean-up always runs to its end.
-    """
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self) -> None:
-        self.received: list[str] = []
-        self._previous: dict[int, Any] = {}
-
-    def __call__(self, signum: int, frame: Any) -> None:
-        """Note the signal (the Python-level handler)."""
-        self.received.append(signal.Signals(signum).name)
-
-    def __enter__(self) -> StopSignals:
-        """Install this handler for SIGINT and SIGTERM."""
-        for sig in self.SIGNALS:
-            self._previous[sig] = signal.signal(sig, self)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        """Restore the handlers, or ignore both signals if one came (the process stops)."""
-        for sig, handler in self._previous.items():
-            # A stopping process ignores further stop signals, to its very end: CPython
-            # resets Python-level handlers to SIG_DFL at finalisation (SIG_IGN it keeps), and
-            # a signal then, while the middleware tears down, would kill it with -2.
-            signal.signal(sig, signal.SIG_IGN if self.received else handler)
-
-
-def main(args: list[str] | None = None) -> int:
-    """
-    Run the node (console script ``torque_estimator``).
+    Run the node until a stop signal or a shutdown; ``stop`` is already installed.
 
     Parameters
     ----------
     args : list of str, optional
         Command-line arguments for rclpy.
+    stop : StopSignals
+        The stop-signal handler, installed before this module was imported.
 
     Returns
     -------
@@ -316,37 +280,38 @@ def main(args: list[str] | None = None) -> int:
         the parameters, pump file or table are invalid.
 
     """
-    with StopSignals() as stop:
-        rclpy.init(args=args)
-        # Made before the node: an executor made after a signal has shut the context down
-        # fails in its constructor (and then in its __del__, with a traceback on stderr).
-        executor = SingleThreadedExecutor()
-        node = None
-        try:
-            if not stop.received:  # else a signal came before rclpy's handler was there
-                node = TorqueEstimatorNode()
-                executor.add_node(node)
-                executor.spin()
-        except PumpFrictionError as exc:
-            print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
-            return 1
-        except ExternalShutdownException:
-            pass
-        except Exception:
-            if not stop.received:  # else the context went away under the start-up
-                raise
-        finally:
-            why = stop.received[0] if stop.received else 'context shut down'
-            logger = node.get_logger().name if node is not None else NODE_NAME
-            executor.shutdown()
-            if node is not None:
-                node.destroy_node()
-            # after destroy_node: the line goes to the console, not to /rosout (whose
-            # publisher died with the context)
-            rclpy.logging.get_logger(logger).info(f'stopping on {why}')
-            rclpy.try_shutdown()
+    if stop.received:  # while Python imported rclpy and the messages: nothing to undo
+        print(f'{NODE_NAME}: stopping on {stop.received[0]} during start-up', file=sys.stderr)
+        return 0
+    rclpy.init(args=args)
+    # Made before the node: an executor made after a signal has shut the context down
+    # fails in its constructor (and then in its __del__, with a traceback on stderr).
+    executor = SingleThreadedExecutor()
+    node = None
+    try:
+        if not stop.received:  # else a signal came before rclpy's handler was there
+            node = TorqueEstimatorNode()
+            executor.add_node(node)
+            executor.spin()
+    except PumpFrictionError as exc:
+        print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
+        return 1
+    except ExternalShutdownException:
+        pass
+    except Exception:
+        # The context went away under the start-up (a signal: rclpy's handler shuts it
+        # down in its own thread, and an rcl call can fail on it before Python has run
+        # our handler), or a real error, which is raised.
+        if not stop.received and rclpy.ok():
+            raise
+    finally:
+        why = stop.received[0] if stop.received else 'context shut down'
+        logger = node.get_logger().name if node is not None else NODE_NAME
+        executor.shutdown()
+        if node is not None:
+            node.destroy_node()
+        # after destroy_node: the line goes to the console, not to /rosout (whose
+        # publisher died with the context)
+        rclpy.logging.get_logger(logger).info(f'stopping on {why}')
+        rclpy.try_shutdown()
     return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
