@@ -145,4 +145,4 @@ def test_the_architecture_page_shows_the_code_as_it_is():
     spec.loader.exec_module(tool)
     page = (root / 'docs' / 'architecture.md').read_text()
     start, end = page.index(tool.BEGIN), page.index(tool.END) + len(tool.END)
-    assert page[start:end] == tool.block(), 'run: python3 tools/architecture.py'
+    assert page[start:end] == tool.block(), 'run: python3 tools/architecture.py --write'

@@ -19,14 +19,15 @@ import itertools
 import math
 
 import numpy as np
-from pump_friction_ros.core.attribution import FrictionAttribution
+from pump_friction_ros.core.attribution import AttributionSettings, FrictionAttribution
 from pump_friction_ros.core.estimate_record import MONITOR_COLUMNS
 from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.inputs import Defect, InputKind
-from pump_friction_ros.core.monitor import WearMonitor
+from pump_friction_ros.core.monitor import MonitorSettings, WearMonitor
 from pump_friction_ros.core.node_parameters import (
     EstimatorConfig,
     PressureSource,
+    settings_view,
     SpeedSource,
     TorqueSource,
     ViscositySource,
@@ -303,7 +304,8 @@ def test_monitor_update_many_equals_update():
                 + np.where(np.arange(n) > 1000, 2.5, 0.0) * np.array(sign)).tolist()
     friction, vp, bearing, pistons, theoretical = (rng.uniform(0.1, 2.0, n).tolist()
                                                    for _ in range(5))
-    one, many = WearMonitor(config), WearMonitor(config)
+    one, many = (WearMonitor(settings_view(config, MonitorSettings),
+                             settings_view(config, AttributionSettings)) for _ in range(2))
     expected = []
     for row in zip(t, dt, residual, friction, vp, bearing, pistons, theoretical, sign,
                    strict=True):

@@ -149,3 +149,16 @@ def test_every_value_in_the_shipped_parameters_file_has_a_comment():
 def test_zero_viscosity_means_the_pump_files():
     assert EstimatorConfig(oil_viscosity_m2_s=0.0).viscosity_m2_s(46e-6) == 46e-6
     assert EstimatorConfig(oil_viscosity_m2_s=68e-6).viscosity_m2_s(46e-6) == 68e-6
+
+
+@pytest.mark.parametrize('view', ['MonitorSettings', 'AttributionSettings'])
+def test_each_filter_takes_named_node_parameters_only(view):
+    from pump_friction_ros.core import attribution, monitor
+    from pump_friction_ros.core.node_parameters import settings_view
+
+    cls = getattr(monitor, view, None) or getattr(attribution, view)
+    assert {f.name for f in fields(cls)} < set(FIELDS)  # a few of them, each declared once
+    config = EstimatorConfig(cusum_drift_nm=0.123, attribution_z=3.5)
+    got = settings_view(config, cls)
+    for f in fields(cls):
+        assert getattr(got, f.name) == getattr(config, f.name)

@@ -64,8 +64,8 @@ def test_expected_torque_at_steady_state_is_the_full_models_plus_drive_loss(
         table, paper_model):
     est = make(table)
     for k in range(200):
-        est.on_pressure(k * NS // 1000, 150e5)
-        e = est.on_joint_state(k * NS // 1000, 600.0, 20.0)
+        est.on_input(K.LOAD_PRESSURE, k * NS // 1000, 150e5)
+        e = est.on_input(K.JOINT_STATE, k * NS // 1000, 600.0, 20.0)
     # the reference: the full model (Newton-Euler over all pistons), not the table
     full = paper_model.evaluate(600.0, 150e5, 46e-6)
     model_input_nm = float(full.input_nm[0])
@@ -84,8 +84,9 @@ def test_filtered_derivative_follows_a_ramp_and_tames_noise(table):
     accel, accels = 2000.0, []
     for k in range(2000):  # 2 s at 1 kHz
         t = k / 1000
-        est.on_pressure(k * NS // 1000, 100e5)
-        e = est.on_joint_state(k * NS // 1000, 100.0 + accel * t + rng.normal(0, 1.0), None)
+        est.on_input(K.LOAD_PRESSURE, k * NS // 1000, 100e5)
+        e = est.on_input(K.JOINT_STATE, k * NS // 1000, 100.0 + accel * t + rng.normal(0, 1.0),
+                         None)
         accels.append(e.inertia_nm / CONFIG.rotor_inertia_kg_m2)
     steady = np.array(accels[500:])
     assert steady.mean() == pytest.approx(accel, rel=0.01)
@@ -106,12 +107,12 @@ def test_port_pressures_give_the_difference(table):
 def test_viscosity_from_temperature_uses_the_walther_law(table):
     cfg = EstimatorConfig(viscosity_source='temperature')
     est = make(table, cfg)
-    est.on_pressure(0, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 0, 100e5)
     assert est.on_input(K.SHAFT_SPEED, 1, 300.0) is None  # no temperature yet
     est.on_input(K.OIL_TEMPERATURE, 2, 40.0)
     assert est.on_input(K.SHAFT_SPEED, 3, 300.0).viscosity_m2_s == pytest.approx(46e-6, rel=1e-9)
     est.on_input(K.OIL_TEMPERATURE, 4, 100.0)
-    est.on_pressure(4, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 4, 100e5)
     assert est.on_input(K.SHAFT_SPEED, 5, 300.0).viscosity_m2_s == pytest.approx(6.8e-6, rel=1e-9)
 
 
@@ -127,7 +128,7 @@ def test_walther_law_matches_iso_vg_46_data():
 def test_stale_inputs_skip_the_estimate_and_diagnostics_say_stale(table):
     est = make(table)
     assert est.diagnostics(0).level == STALE
-    est.on_pressure(0, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 0, 100e5)
     assert est.on_input(K.SHAFT_SPEED, 10_000_000, 300.0) is not None
     assert est.on_input(K.SHAFT_SPEED, 100_000_000, 300.0) is None  # pressure 100 ms old > 50 ms
     assert est.counts['stale_skips'] == 1
@@ -135,24 +136,24 @@ def test_stale_inputs_skip_the_estimate_and_diagnostics_say_stale(table):
     assert snap.level == OK  # last estimate 90 ms ago < stale_timeout_s
     snap = est.diagnostics(700_000_000)
     assert snap.level == STALE and 'pressure' in snap.message
-    est.on_pressure(710_000_000, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 710_000_000, 100e5)
     assert est.on_input(K.SHAFT_SPEED, 720_000_000, 300.0) is not None
     assert est.diagnostics(720_000_000).level == OK
 
 
 @pytest.mark.parametrize(('call', 'counter'), [
     (lambda e: e.on_input(K.SHAFT_SPEED, 5, math.nan), 'rejected_non_finite'),
-    (lambda e: e.on_pressure(5, math.inf), 'rejected_non_finite'),
+    (lambda e: e.on_input(K.LOAD_PRESSURE, 5, math.inf), 'rejected_non_finite'),
     (lambda e: e.on_input(K.MOTOR_TORQUE, 5, -math.inf), 'rejected_non_finite'),
     (lambda e: e.on_input(K.SHAFT_SPEED, 1, 300.0), 'rejected_out_of_order'),
     (lambda e: e.on_input(K.SHAFT_SPEED, 2, 300.0), 'rejected_duplicate'),
     (lambda e: e.on_input(K.SHAFT_SPEED, 5, 1e6), 'rejected_out_of_range'),
-    (lambda e: e.on_pressure(5, 1e10), 'rejected_out_of_range'),
+    (lambda e: e.on_input(K.LOAD_PRESSURE, 5, 1e10), 'rejected_out_of_range'),
     (lambda e: e.on_input(K.OIL_TEMPERATURE, 5, 900.0), 'rejected_out_of_range'),
 ])
 def test_bad_samples_are_rejected_counted_and_change_nothing(table, call, counter):
     est = make(table)
-    est.on_pressure(0, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 0, 100e5)
     est.on_input(K.MOTOR_TORQUE, 0, 10.0)
     before = est.on_input(K.SHAFT_SPEED, 2, 300.0)
     assert call(est) in (None, False)
@@ -166,14 +167,14 @@ def test_output_decimation_publishes_every_nth_estimate(table):
     est = make(table, EstimatorConfig(output_decimation=4, oil_viscosity_m2_s=46e-6))
     flags = []
     for k in range(12):
-        est.on_pressure(k * 1000, 100e5)
+        est.on_input(K.LOAD_PRESSURE, k * 1000, 100e5)
         flags.append(est.on_input(K.SHAFT_SPEED, k * 1000, 300.0).publish)
     assert flags == [True, False, False, False] * 3
 
 
 def test_diagnostic_values_are_numbers_with_units_in_their_keys(table):
     est = make(table)
-    est.on_pressure(0, 100e5)
+    est.on_input(K.LOAD_PRESSURE, 0, 100e5)
     est.on_input(K.MOTOR_TORQUE, 0, 9.0)
     est.on_input(K.SHAFT_SPEED, 1, 300.0)
     values = dict(est.diagnostics(2).values)
@@ -234,9 +235,9 @@ def test_reversals_through_zero_speed_do_not_alarm(table):
         dp = 80e5 + 40e5 * math.sin(2 * math.pi * t / 11.0)
         truth = table.lookup(speed, dp, 46e-6).input_nm + 2e-4 * accel + \
             0.05 * math.tanh(speed / table.zero_speed_threshold_rad_s)
-        est.on_pressure(k * NS // 1000, dp + rng.normal(0, 1e5))
-        est.on_joint_state(k * NS // 1000, speed + rng.normal(0, 0.5),
-                           truth + rng.normal(0, 0.05))
+        est.on_input(K.LOAD_PRESSURE, k * NS // 1000, dp + rng.normal(0, 1e5))
+        est.on_input(K.JOINT_STATE, k * NS // 1000, speed + rng.normal(0, 0.5),
+                     truth + rng.normal(0, 0.05))
     assert est.monitor.level == OK
     assert est.monitor.cusum_pos_nm_s < 0.2 * CONFIG.cusum_warn_nm_s
     assert est.monitor.cusum_neg_nm_s < 0.2 * CONFIG.cusum_warn_nm_s

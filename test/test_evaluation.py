@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from pump_friction_ros.app.cli import main
 from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.inputs import InputKind
 from pump_friction_ros.core.monitor import OK
 from pump_friction_ros.evaluation.bank import (
     base_config,
@@ -239,8 +240,8 @@ def test_false_alarm_rates_delays_confusion_and_coverage_by_hand():
 def monitored_core(table, valve_plate, rest, loss):
     """Return a core whose monitor saw 60 s of a pump with these true terms."""
     core = TorqueEstimator(CONFIG, table, 46e-6, 'hong_doh_2004')
-    core.on_pressure(0, 100e5)
-    core.on_joint_state(0, 300.0, 10.0)
+    core.on_input(InputKind.LOAD_PRESSURE, 0, 100e5)
+    core.on_input(InputKind.JOINT_STATE, 0, 300.0, 10.0)
     rng = np.random.default_rng(5)
     for k in range(60000):  # 60 s at 1 kHz; both directions, pump and motor mode
         sign = 1.0 if (k // 700) % 2 else -1.0

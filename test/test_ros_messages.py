@@ -115,7 +115,7 @@ def test_levels_convert_for_rosbags_ints_and_rclpy_bytes():
 def estimator(paper_params):
     est = TorqueEstimator(EstimatorConfig(oil_viscosity_m2_s=46e-6), build_table(paper_params),
                           46e-6, 'hong_doh_2004')
-    est.on_pressure(0, 120e5)
+    est.on_input(InputKind.LOAD_PRESSURE, 0, 120e5)
     est.on_input(InputKind.MOTOR_TORQUE, 0, 11.0)
     est.on_input(InputKind.SHAFT_SPEED, 1_000, 500.0)
     return est

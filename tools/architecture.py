@@ -16,6 +16,7 @@
 Print the package's layers as the code draws them: a Mermaid graph and the modules per layer.
 
     python3 tools/architecture.py            # the block docs/architecture.md embeds
+    python3 tools/architecture.py --write    # replace that block in the page
 
 Layers are the folders of ``pump_friction_ros`` (``base``: the modules directly in it);
 an arrow A --> B means some module of A imports one of B, labelled with how many import
@@ -75,5 +76,17 @@ def block():
     return '\n'.join(lines)
 
 
+def write(page=PACKAGE.parent / 'docs' / 'architecture.md'):
+    """Replace the block between the markers of ``page`` with the current one."""
+    text = page.read_text()
+    start, end = text.index(BEGIN), text.index(END) + len(END)
+    page.write_text(text[:start] + block() + text[end:])
+
+
 if __name__ == '__main__':
-    print(block())
+    import sys
+
+    if sys.argv[1:] == ['--write']:
+        write()
+    else:
+        print(block())

@@ -141,6 +141,7 @@ def bench_table() -> None:
 def bench_estimator() -> None:
     """Estimator core: cost of one joint-state sample (lookup, derivative, residual, monitor)."""
     from ..core.estimator import TorqueEstimator
+    from ..core.inputs import InputKind
     from ..core.node_parameters import EstimatorConfig
     from ..sim.duty_cycle import DutyCycle, simulate_duty_cycle
     from ..table.friction_table import build_table
@@ -155,18 +156,20 @@ def bench_estimator() -> None:
     print('  baseline: the bare scalar table lookup (FrictionTable.magnitudes) for the same '
           'samples')
 
+    joint, pressure = InputKind.JOINT_STATE, InputKind.LOAD_PRESSURE
+
     def run_core() -> None:
         core = TorqueEstimator(EstimatorConfig(), table, params.oil.viscosity_m2_s)
-        on_pressure, on_joint = core.on_pressure, core.on_joint_state
+        on_input = core.on_input
         for k in range(n):
-            on_pressure(stamps[k], 100e5)
-            on_joint(stamps[k], speed[k], torque[k])
+            on_input(pressure, stamps[k], 100e5)
+            on_input(joint, stamps[k], speed[k], torque[k])
 
     def run_pressure_only() -> None:
         core = TorqueEstimator(EstimatorConfig(), table, params.oil.viscosity_m2_s)
-        on_pressure = core.on_pressure
+        on_input = core.on_input
         for k in range(n):
-            on_pressure(stamps[k], 100e5)
+            on_input(pressure, stamps[k], 100e5)
 
     def run_lookup() -> None:
         lookup = table.magnitudes

@@ -49,17 +49,28 @@ the modelled friction, independent from window to window. The states walk random
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
 
 import numpy as np
 
-from .node_parameters import EstimatorConfig
+__all__ = ['TERMS', 'TERM_TABLE', 'AttributionSettings', 'FrictionAttribution', 'Verdict']
 
-__all__ = ['TERMS', 'FrictionAttribution', 'Verdict']
+TERM_TABLE = (
+    ('valve_plate', 'valve_plate_friction_scale', 0.0),
+    ('other_friction', 'other_friction_scale', 0.0),
+    ('drive_loss_nm', 'extra_drive_loss_nm', 0.0),
+    ('torque_offset_nm', 'torque_offset_nm', 0.0),
+    ('pressure_gain', 'pressure_sensor_gain_scale', 1.0),
+)
+"""
+Each term of the filter's state, declared once: (name, /diagnostics key, added for the key).
 
-TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
-         'pressure_gain')
-"""State of the filter: two friction scales [-], two torques [N m], a gain error [-]."""
+Two friction scales [-], two torques [N m], a gain error g [-], reported as the gain 1 + g;
+each key has a ``_std`` twin in /diagnostics.
+"""
+TERMS = tuple(name for name, _, _ in TERM_TABLE)
+"""State of the filter, in `TERM_TABLE` order."""
 _VP, _OTHER, _LOSS, _OFFSET, _GAIN = range(5)
 _N = len(TERMS)
 _NOT_FRICTION = (_LOSS, _OFFSET, _GAIN)
@@ -84,20 +95,36 @@ class Verdict:
     CANNOT_TELL = 'cannot_tell'
 
 
+@dataclass(frozen=True)
+class AttributionSettings:
+    """The node parameters the attribution uses (declared in ``node_parameters``)."""
+
+    attribution_window_s: float
+    scale_prior_std: float
+    offset_prior_std_nm: float
+    pressure_gain_prior_std: float
+    scale_random_walk_per_sqrt_s: float
+    offset_random_walk_nm_per_sqrt_s: float
+    pressure_gain_random_walk_per_sqrt_s: float
+    model_error_ratio: float
+    attribution_z: float
+    identifiability_correlation: float
+
+
 class FrictionAttribution:
     """
     Windowed Kalman filter on (valve-plate scale, other scale, drive loss, offset, gain).
 
     Parameters
     ----------
-    config : EstimatorConfig
+    settings : AttributionSettings
         The ``attribution_*``, ``scale_*``, ``offset_*``, ``pressure_gain_*`` and
         ``model_error_ratio`` parameters.
 
     """
 
-    def __init__(self, config: EstimatorConfig) -> None:
-        self.config = config
+    def __init__(self, settings: AttributionSettings) -> None:
+        self.settings = config = settings
         self._window_s = config.attribution_window_s
         self.x0 = np.array([1.0, 1.0, 0.0, 0.0, 0.0])
         self._p0 = np.diag([config.scale_prior_std ** 2] * 2
@@ -259,7 +286,7 @@ class FrictionAttribution:
             elapsed = min(max(t_s - self._last_update_s, 0.0), _MAX_PREDICT_S)
             self.p = self._capped(self.p + self._q * elapsed)
         self._last_update_s = t_s
-        model = self.config.model_error_ratio * (h[_VP] + h[_OTHER])
+        model = self.settings.model_error_ratio * (h[_VP] + h[_OTHER])
         r = self._white_var * inv + model * model
         ph = self.p @ h
         s = float(h @ ph) + r
@@ -308,13 +335,13 @@ class FrictionAttribution:
             (`Verdict` value, short explanation).
 
         """
-        z_sig = self.config.attribution_z
+        z_sig = self.settings.attribution_z
         dev = self.x - self.x0
         std = self.std
         z = np.divide(dev, std, out=np.zeros(_N), where=std > 0)
         significant = [i for i in range(_N) if abs(z[i]) >= z_sig and (
             i not in (_VP, _OTHER) or side == 0.0 or z[i] * side > 0.0)]
-        rho_max = self.config.identifiability_correlation
+        rho_max = self.settings.identifiability_correlation
         for other in range(1, _N):
             rho = self.correlation(_VP, other)
             if abs(rho) >= rho_max and not (_VP in significant and other in significant):

@@ -19,13 +19,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 
+from .attribution import TERM_TABLE
 from .estimate_record import COUNTERS, Estimate
 from .monitor import LEVEL_NAMES, OK, STALE, WearMonitor
-from .node_parameters import EstimatorConfig
 from ..physics.model import COMPONENTS
 from ..table.friction_table import describe_flags, NOT_FINITE
 
-__all__ = ['ATTRIBUTION_KEYS', 'DiagnosticSnapshot', 'format_value', 'level_message',
+__all__ = ['DiagnosticSnapshot', 'format_value', 'level_message',
            'snapshot']
 
 
@@ -39,7 +39,7 @@ class DiagnosticSnapshot:
 
 
 def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
-             config: EstimatorConfig, stale_reason: str, now_ns: int) -> DiagnosticSnapshot:
+             stale_timeout_s: float, stale_reason: str, now_ns: int) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -51,8 +51,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         The wear monitor.
     counts : dict
         The estimator's counters (`COUNTERS`).
-    config : EstimatorConfig
-        Parameters (stale timeout, CUSUM thresholds).
+    stale_timeout_s : float
+        The ``stale_timeout_s`` parameter [s] (the CUSUM thresholds are the monitor's).
     stale_reason : str
         Why the latest sample made no estimate.
     now_ns : int
@@ -67,7 +67,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     est = last
     mon = monitor
     age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
-    if est is None or age_s > config.stale_timeout_s:
+    if est is None or age_s > stale_timeout_s:
         level = STALE
         message = f'stale: {stale_reason}' if est is None or counts['stale_skips'] \
             else 'stale: no shaft speed'
@@ -100,13 +100,12 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('residual_std_nm', mon.residual_std_nm),
         ('cusum_pos_nm_s', mon.cusum_pos_nm_s),
         ('cusum_neg_nm_s', mon.cusum_neg_nm_s),
-        ('cusum_warn_nm_s', config.cusum_warn_nm_s),
-        ('cusum_error_nm_s', config.cusum_error_nm_s),
+        ('cusum_warn_nm_s', mon.settings.cusum_warn_nm_s),
+        ('cusum_error_nm_s', mon.settings.cusum_error_nm_s),
     ]
     att = mon.attribution
-    for name, value, offset, std in zip(ATTRIBUTION_KEYS, att.x, ATTRIBUTION_OFFSETS, att.std,
-                                        strict=True):
-        values += [(name, float(value) + offset), (f'{name}_std', float(std))]
+    for (_, key, offset), value, std in zip(TERM_TABLE, att.x, att.std, strict=True):
+        values += [(key, float(value) + offset), (f'{key}_std', float(std))]
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
@@ -134,14 +133,6 @@ def level_message(level: int, mon: WearMonitor) -> str:
     side = 'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below'
     verdict = mon.attribution.verdict(1.0 if side == 'above' else -1.0)[1]
     return f'{LEVEL_NAMES[level]}: torque {side} model: {verdict}'
-
-
-ATTRIBUTION_KEYS = ('valve_plate_friction_scale', 'other_friction_scale',
-                    'extra_drive_loss_nm', 'torque_offset_nm', 'pressure_sensor_gain_scale')
-"""Diagnostic keys of the attribution's terms (``attribution.TERMS`` order), each with a
-``_std`` twin."""
-ATTRIBUTION_OFFSETS = (0.0, 0.0, 0.0, 0.0, 1.0)
-"""Added to each term for its key: the pressure gain error g is reported as the gain 1 + g."""
 
 
 def format_value(value: float | int | str) -> str:

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .attribution import AttributionSettings
 from .chunk_path import estimate_chunk
 from .diagnostics import DiagnosticSnapshot, snapshot
 from .estimate_record import COUNTERS, Estimate, EstimateColumns
@@ -58,10 +59,11 @@ from .inputs import (
     MAX_TORQUE_NM,
     TEMPERATURE_RANGE_C,
 )
-from .monitor import WearMonitor
+from .monitor import MonitorSettings, WearMonitor
 from .node_parameters import (
     EstimatorConfig,
     PressureSource,
+    settings_view,
     SpeedSource,
     TorqueSource,
     ViscositySource,
@@ -132,13 +134,21 @@ class TorqueEstimator:
         self._zero_speed = table.zero_speed_threshold_rad_s
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
-        self.monitor = WearMonitor(config)
+        self.monitor = WearMonitor(settings_view(config, MonitorSettings),
+                                   settings_view(config, AttributionSettings))
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
-        self._handlers: tuple[Callable[[int, Any, float | None], Estimate | None], ...] = (
-            self._on_joint_state, self._on_speed, self._on_torque, self._on_pressure,
-            self._on_pressure_a, self._on_pressure_b, self._on_temperature)
+        handlers = {InputKind.JOINT_STATE: self._on_joint_state,
+                    InputKind.SHAFT_SPEED: self._on_speed,
+                    InputKind.MOTOR_TORQUE: self._on_torque,
+                    InputKind.LOAD_PRESSURE: self._on_pressure,
+                    InputKind.PRESSURE_A: self._on_pressure_a,
+                    InputKind.PRESSURE_B: self._on_pressure_b,
+                    InputKind.OIL_TEMPERATURE: self._on_temperature}
+        # indexed by InputKind (an int) for the per-message path; every kind has one
+        self._handlers: tuple[Callable[[int, Any, float | None], Estimate | None], ...] = \
+            tuple(handlers[kind] for kind in InputKind)
         self.reset()
 
     def reset(self) -> None:
@@ -248,32 +258,6 @@ class TorqueEstimator:
 
         """
         self.counts[DEFECT_COUNTER[Defect(defect)]] += 1
-
-    def on_joint_state(self, stamp_ns: int, speed_rad_s: float | None,
-                       torque_nm: float | None) -> Estimate | None:
-        """
-        Take a JointState sample: speed (velocity) and / or torque (effort).
-
-        Parameters
-        ----------
-        stamp_ns : int
-            Sample time [ns].
-        speed_rad_s : float or None
-            Shaft speed [rad/s], None when the message carries none.
-        torque_nm : float or None
-            Measured motor torque [N m], None when the message carries none.
-
-        Returns
-        -------
-        Estimate or None
-            The estimate made, if any.
-
-        """
-        return self._on_joint_state(stamp_ns, speed_rad_s, torque_nm)
-
-    def on_pressure(self, stamp_ns: int, pressure_diff_pa: float) -> bool:
-        """Take a pressure difference p_A - p_B sample [Pa]; False if rejected."""
-        return self._accept(self._pressure, stamp_ns, pressure_diff_pa, MAX_PRESSURE_PA)
 
     def _on_joint_state(self, stamp_ns: int, speed: float | None,
                         torque: float | None) -> Estimate | None:
@@ -432,7 +416,7 @@ class TorqueEstimator:
             Level, message and key-values.
 
         """
-        return snapshot(self.last, self.monitor, self.counts, self.config,
+        return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
                         self.last_stale_reason, now_ns)
 
 

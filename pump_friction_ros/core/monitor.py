@@ -33,13 +33,14 @@ of rotation.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
 from typing import NamedTuple
 
-from .attribution import FrictionAttribution
-from .node_parameters import EstimatorConfig
+from .attribution import AttributionSettings, FrictionAttribution
 
-__all__ = ['ERROR', 'LEVEL_NAMES', 'OK', 'STALE', 'WARN', 'MonitorTrace', 'WearMonitor']
+__all__ = ['ERROR', 'LEVEL_NAMES', 'OK', 'STALE', 'WARN', 'MonitorSettings', 'MonitorTrace',
+           'WearMonitor']
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 CUSUM_CAP_RATIO = 1.2
@@ -61,19 +62,32 @@ class MonitorTrace(NamedTuple):
     other_scale_std: list[float]
 
 
+@dataclass(frozen=True)
+class MonitorSettings:
+    """The node parameters of the detection (declared in ``node_parameters``)."""
+
+    ewma_time_constant_s: float
+    cusum_drift_nm: float
+    cusum_warn_nm_s: float
+    cusum_error_nm_s: float
+    cusum_clear_ratio: float
+
+
 class WearMonitor:
     """
     Stateful wear monitor; feed it one friction-direction sample at a time.
 
     Parameters
     ----------
-    config : EstimatorConfig
-        Tuning: the ``ewma_*`` and ``cusum_*`` parameters, and the attribution's.
+    config : MonitorSettings
+        Tuning of the detection: the ``ewma_*`` and ``cusum_*`` parameters.
+    attribution : AttributionSettings
+        Tuning of the attribution.
 
     """
 
-    def __init__(self, config: EstimatorConfig) -> None:
-        self.config = config
+    def __init__(self, config: MonitorSettings, attribution: AttributionSettings) -> None:
+        self.settings = config
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
         self._h_warn = config.cusum_warn_nm_s
@@ -81,7 +95,7 @@ class WearMonitor:
         self._clear = config.cusum_clear_ratio
         self._cap = CUSUM_CAP_RATIO * config.cusum_error_nm_s
         self._dt = self._a = math.nan
-        self.attribution = FrictionAttribution(config)
+        self.attribution = FrictionAttribution(attribution)
         self.reset()
 
     def reset(self) -> None:

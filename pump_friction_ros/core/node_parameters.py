@@ -28,11 +28,13 @@ from dataclasses import dataclass, field, fields
 from enum import Enum
 import math
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from ..errors import ConfigError, quote
 from ..paths import resolve_path
 from ..yaml_files import read_yaml
+
+_View = TypeVar('_View')
 
 __all__ = [
     'BAG_PARAMS_FILE',
@@ -47,6 +49,7 @@ __all__ = [
     'config_from_mapping',
     'load_estimator_config',
     'quote',
+    'settings_view',
 ]
 
 NODE_NAME = 'torque_estimator'
@@ -235,6 +238,29 @@ class EstimatorConfig:
 
         """
         return self.oil_viscosity_m2_s or pump_file_viscosity_m2_s
+
+
+def settings_view(config: EstimatorConfig, cls: type[_View]) -> _View:
+    """
+    Return the settings dataclass ``cls`` filled from the same-named node parameters.
+
+    A filter takes the few parameters it uses, as a small frozen dataclass whose fields are
+    named after them; each parameter stays declared once, here (default, range, text).
+
+    Parameters
+    ----------
+    config : EstimatorConfig
+        The node parameters.
+    cls : type
+        A dataclass whose fields are all `EstimatorConfig` fields.
+
+    Returns
+    -------
+    object
+        An instance of ``cls``.
+
+    """
+    return cls(**{f.name: getattr(config, f.name) for f in fields(cls)})  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)

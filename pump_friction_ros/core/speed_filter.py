@@ -82,11 +82,6 @@ class SpeedFilter:
         self._last_ns: int | None = None
         self.accel_rad_s2 = 0.0
 
-    @property
-    def filtered_speed_rad_s(self) -> float:
-        """Output of the second stage [rad/s]: what `filter_two_stage` gives for the record."""
-        return self._lp2
-
     def update(self, stamp_ns: int, speed_rad_s: float) -> float:
         """
         Take one speed sample and return the filtered acceleration.
