@@ -141,7 +141,8 @@ def _target(s: SetpointSettings, plant: Plant, now: float, move: int,
             rng: np.random.Generator) -> float:
     low, high = s.margin_fraction * plant.stroke_m, (1.0 - s.margin_fraction) * plant.stroke_m
     if rng.random() < s.small_move_probability:
-        step = _draw(rng, (0.01, 0.05)) * plant.stroke_m * (1.0 if rng.random() < 0.5 else -1.0)
+        step = _draw(rng, s.small_move_fraction) * plant.stroke_m * (
+            1.0 if rng.random() < 0.5 else -1.0)
         return float(np.clip(now + step, low, high))
     if s.pick_place:
         zone = s.zone_fraction * plant.stroke_m

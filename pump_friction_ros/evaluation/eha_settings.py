@@ -148,7 +148,9 @@ class SetpointSettings:
     zone_fraction: float = 0.25
     """Pick-and-place: each zone is this fraction of the stroke at its end [-]."""
     small_move_probability: float = 0.2
-    """A move is a small correction of 1-5 % of the stroke (creep, frequent reversals)."""
+    """A move is a small correction (creep, frequent reversals)."""
+    small_move_fraction: Range = (0.01, 0.05)
+    """Size of a small correction as a fraction of the stroke [-]."""
 
 
 @dataclass(frozen=True)
