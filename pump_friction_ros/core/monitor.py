@@ -269,6 +269,47 @@ class WearMonitor:
                                                  theoretical_nm, sign)
         return MonitorTrace(levels, positive, negative, *scales, *stds)
 
+    STATE_VERSION = 1
+    """Version of `state_dict`'s layout; `load_state_dict` refuses others."""
+
+    def state_dict(self) -> dict[str, object]:
+        """
+        Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
+
+        Returns
+        -------
+        dict
+            ``version`` and the learnt state; `load_state_dict` restores it exactly.
+
+        """
+        return {'version': self.STATE_VERSION, 'samples': self.samples,
+                'cusum_pos_nm_s': self.cusum_pos_nm_s, 'cusum_neg_nm_s': self.cusum_neg_nm_s}
+
+    def load_state_dict(self, state: dict[str, object]) -> None:
+        """
+        Restore what `state_dict` returned.
+
+        Parameters
+        ----------
+        state : dict
+            A `state_dict` result (e.g. read back from the node's baseline file).
+
+        Raises
+        ------
+        ValueError
+            A state of another version, or missing or malformed entries.
+
+        """
+        if state.get('version') != self.STATE_VERSION:
+            raise ValueError(f'monitor state version {state.get("version")!r}, '
+                             f'expected {self.STATE_VERSION}')
+        try:
+            self.samples = int(state['samples'])  # type: ignore[call-overload]
+            self.cusum_pos_nm_s = float(state['cusum_pos_nm_s'])  # type: ignore[arg-type]
+            self.cusum_neg_nm_s = float(state['cusum_neg_nm_s'])  # type: ignore[arg-type]
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f'malformed monitor state: {exc}') from None
+
     def _level(self, s: float) -> int:
         if s >= self._h_error or (self.level == ERROR and s > self._clear * self._h_error):
             return ERROR
