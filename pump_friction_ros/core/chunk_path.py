@@ -291,12 +291,13 @@ def _estimate_arrays(core: TorqueEstimator, kinds: np.ndarray, stamps: np.ndarra
     speed = _accept(core, '_speed', pick(speed_mask, values), MAX_SPEED_RAD_S)
     if not speed.positions.size:
         return _nothing()
-    accel = core.filter.update_many(speed.stamps.tolist(), speed.values.tolist())
-    return _estimates(core, speed, np.array(accel), torque, pressure, port_a, port_b,
-                      temperature)
+    accel, restarts = core.filter.update_many(speed.stamps.tolist(), speed.values.tolist())
+    return _estimates(core, speed, np.array(accel), np.array(restarts, dtype=np.int64), torque,
+                      pressure, port_a, port_b, temperature)
 
 
-def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray, torque: _Accepted,
+def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray,
+               restarts: np.ndarray, torque: _Accepted,
                pressure: _Accepted, port_a: _Accepted, port_b: _Accepted,
                temperature: _Accepted) -> tuple[np.ndarray, EstimateColumns]:
     """Sample-and-hold, stale skips, and the estimates of the accepted speed samples."""
@@ -323,6 +324,7 @@ def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray, torqu
             else 'no fresh oil temperature'
         keep = np.flatnonzero(made)
         q, stamp, dp, accel = q[keep], stamp[keep], dp[keep], accel[keep]
+        restarts = restarts[keep]
         speed_rad_s = speed_rad_s[keep]
         if core._use_temperature:
             celsius = celsius[keep]
@@ -336,7 +338,8 @@ def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray, torqu
         viscosity = np.full(q.size, core._viscosity_m2_s)
     has_torque, torque_nm = _fresh(torque, q, stamp, max_age)
     measured = np.where(has_torque, torque_nm, math.nan)
-    return q, _build(core, stamp, speed_rad_s, dp, viscosity, accel, measured, has_torque)
+    return q, _build(core, stamp, speed_rad_s, dp, viscosity, accel, restarts, measured,
+                     has_torque)
 
 
 def _fresh(held: _Accepted, positions: np.ndarray, stamps: np.ndarray, max_age_ns: int
@@ -347,8 +350,8 @@ def _fresh(held: _Accepted, positions: np.ndarray, stamps: np.ndarray, max_age_n
 
 
 def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.ndarray,
-           viscosity: np.ndarray, accel: np.ndarray, measured: np.ndarray,
-           has_torque: np.ndarray) -> EstimateColumns:
+           viscosity: np.ndarray, accel: np.ndarray, restarts: np.ndarray,
+           measured: np.ndarray, has_torque: np.ndarray) -> EstimateColumns:
     """``TorqueEstimator._estimate`` over arrays: the torques, the monitor, the estimates."""
     counts = core.counts
     lookup = core._chunk_lookup()
@@ -366,17 +369,23 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
     efficiency = _efficiency(core, theoretical, steady, speed, dp)
     residual = measured - expected  # NaN without a fresh torque
     counts['residuals'] += int(np.count_nonzero(has_torque))
-    monitored = has_torque & (np.abs(speed) >= core._monitor_min_speed) & \
+    steady_now = (np.abs(speed) >= core._monitor_min_speed) & \
         (np.abs(accel) <= core._monitor_max_accel)
+    other = (bearing + joints) + heads
+    releases, released = core.settled.update_many(
+        stamp.tolist(), restarts.tolist(),
+        np.where(has_torque, measured - steady, math.nan).tolist(), steady_now.tolist(),
+        list(zip(inertia.tolist(), vp.tolist(), other.tolist(), theoretical.tolist(),
+                 speed.tolist(), strict=True)))
+    monitored = np.zeros(stamp.size, dtype=bool)
+    monitored[releases] = True
     monitor = core.monitor
     before: list[list[float]] = [[x] for x in (
         monitor.level, monitor.cusum_pos_nm_s, monitor.cusum_neg_nm_s, monitor.theta_vp,
         monitor.theta_rest, monitor.valve_plate_scale_std, monitor.rest_scale_std)]
-    at = np.flatnonzero(monitored)
-    if at.size:
-        trace = _monitor(core, at, stamp, speed, measured, theoretical, inertia, residual, vp,
-                         bearing, joints + heads)
-        counts['monitor_samples'] += int(at.size)
+    if released:
+        trace = _monitor(core, released)
+        counts['monitor_samples'] += len(released)
         # each estimate carries the monitor's state after the latest monitored sample
         latest = np.cumsum(monitored)
         state = [np.array(first + after)[latest]
@@ -411,25 +420,25 @@ def _efficiency(core: TorqueEstimator, theoretical: np.ndarray, steady: np.ndarr
     return np.where(undefined, math.nan, np.where(theoretical * speed > 0.0, pumping, motoring))
 
 
-def _monitor(core: TorqueEstimator, at: np.ndarray, stamp: np.ndarray, speed: np.ndarray,
-             measured: np.ndarray, theoretical: np.ndarray, inertia: np.ndarray,
-             residual: np.ndarray, vp: np.ndarray, bearing: np.ndarray, pistons: np.ndarray
-             ) -> MonitorTrace:
-    """Feed the monitored samples to the wear monitor, with `_estimate`'s gap rule."""
-    sign = np.where(speed[at] > 0.0, 1.0, -1.0)
-    friction = (measured[at] - theoretical[at] - inertia[at]) * sign - core._drive_loss
-    stamps = stamp[at].tolist()
-    gaps = []
+def _monitor(core: TorqueEstimator, released: list[tuple[int, float, tuple[
+        float, float, float, float, float]]]) -> MonitorTrace:
+    """Feed the released settled samples to the wear monitor: `TorqueEstimator._monitor`."""
+    times, gaps, residuals, vps, others, theoreticals, signs = (
+        [], [], [], [], [], [], [])
     last = core._monitor_stamp_ns
     max_dt = core._monitor_max_dt
     inf = math.inf
-    for s in stamps:
+    for stamp, filtered, (inertia, vp, other, theoretical, speed) in released:
+        sign = 1.0 if speed > 0.0 else -1.0
         # a clock restart (stamp resync) steps back: a new run for the monitor
-        gap = inf if last is None or s <= last else (s - last) * 1e-9
+        gap = inf if last is None or stamp <= last else (stamp - last) * 1e-9
+        last = stamp
+        times.append(stamp * 1e-9)
         gaps.append(gap if gap <= max_dt else 0.0)
-        last = s
+        residuals.append((filtered - inertia) * sign)
+        vps.append(vp)
+        others.append(other)
+        theoreticals.append(theoretical)
+        signs.append(sign)
     core._monitor_stamp_ns = last
-    return core.monitor.update_many((stamp[at] * 1e-9).tolist(), gaps, residual[at].tolist(),
-                                    friction.tolist(), vp[at].tolist(), bearing[at].tolist(),
-                                    pistons[at].tolist(), theoretical[at].tolist(),
-                                    sign.tolist())
+    return core.monitor.update_many(times, gaps, residuals, vps, others, theoreticals, signs)

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 
-from .attribution import TERM_TABLE
+from .baseline import BASELINE_TERMS
 from .estimate_record import COUNTERS, Estimate
 from .monitor import LEVEL_NAMES, OK, STALE, WearMonitor
 from ..physics.model import COMPONENTS
@@ -27,6 +27,9 @@ from ..table.friction_table import describe_flags, NOT_FINITE
 
 __all__ = ['DiagnosticSnapshot', 'format_value', 'level_message',
            'snapshot']
+
+_RELATIVE = ('valve_plate', 'other_friction', 'torque_gain')
+"""Baseline terms that are relative changes, reported as factors (1: as modelled)."""
 
 
 @dataclass(frozen=True)
@@ -103,9 +106,19 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('cusum_warn_nm_s', mon.settings.cusum_warn_nm_s),
         ('cusum_error_nm_s', mon.settings.cusum_error_nm_s),
     ]
-    att = mon.attribution
-    for (_, key, offset), value, std in zip(TERM_TABLE, att.x, att.std, strict=True):
-        values += [(key, float(value) + offset), (f'{key}_std', float(std))]
+    values += [
+        ('valve_plate_scale', mon.theta_vp),
+        ('valve_plate_scale_std', mon.valve_plate_scale_std),
+        ('other_friction_scale', mon.theta_rest),
+        ('other_friction_scale_std', mon.rest_scale_std),
+        ('baseline_status', mon.baseline_status()),
+    ]
+    fit = mon.baseline if mon.baseline is not None else mon.fit
+    for name, value, std in zip(BASELINE_TERMS, fit.coefficients, fit.std(), strict=True):
+        offset = 1.0 if name in _RELATIVE else 0.0  # a relative change shown as a factor
+        values += [(f'baseline_{name}', float(value) + offset),
+                   (f'baseline_{name}_std', float(std))]
+    values.append(('baseline_window_std_nm', math.sqrt(fit.window_var_nm2)))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
@@ -129,10 +142,12 @@ def level_message(level: int, mon: WearMonitor) -> str:
 
     """
     if level == OK:
-        return 'friction as modelled'
+        if mon.learning:
+            return mon.baseline_status()
+        return 'torque as the healthy baseline'
     side = 'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below'
-    verdict = mon.attribution.verdict(1.0 if side == 'above' else -1.0)[1]
-    return f'{LEVEL_NAMES[level]}: torque {side} model: {verdict}'
+    verdict = mon.verdict(1.0 if side == 'above' else -1.0)[1]
+    return f'{LEVEL_NAMES[level]}: torque {side} the healthy baseline: {verdict}'
 
 
 def format_value(value: float | int | str) -> str:

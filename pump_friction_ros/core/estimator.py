@@ -68,6 +68,7 @@ from .node_parameters import (
     TorqueSource,
     ViscositySource,
 )
+from .settled_residual import SettledResidual
 from .speed_filter import SpeedFilter
 from ..paths import resolve_path
 from ..physics.friction import smooth_sign_scalar
@@ -135,9 +136,12 @@ class TorqueEstimator:
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
         self.monitor = WearMonitor(settings_view(config, MonitorSettings),
-                                   settings_view(config, AttributionSettings))
+                                   settings_view(config, AttributionSettings),
+                                   config.drive_loss_torque_nm, not self._use_temperature)
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
+        self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,
+                                       config.monitor_settle_s, config.monitor_lookahead_s)
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
         handlers = {InputKind.JOINT_STATE: self._on_joint_state,
                     InputKind.SHAFT_SPEED: self._on_speed,
@@ -161,12 +165,13 @@ class TorqueEstimator:
         self._torque = _Input('torque')
         self._temperature = _Input('temperature')
         self.filter.reset()
+        self.settled.reset()
         self.last: Estimate | None = None
         self.last_stale_reason = 'no input yet'
         self.reset_monitor()
 
     def reset_monitor(self) -> None:
-        """Forget the wear monitor's state (after a repair): friction as modelled, no alarm."""
+        """Forget the wear monitor's state, its baseline included (after a repair): re-learn."""
         self.monitor.reset()
         self._monitor_stamp_ns: int | None = None
 
@@ -379,17 +384,14 @@ class TorqueEstimator:
             measured = torque.value
             residual = measured - expected
             counts['residuals'] += 1
-            if abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel:
-                sign = 1.0 if speed > 0.0 else -1.0
-                last = self._monitor_stamp_ns
-                # a clock restart (stamp resync) steps back: a new run for the monitor
-                gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
-                self._monitor_stamp_ns = stamp_ns
-                friction_part = (measured - theoretical - inertia) * sign - self._drive_loss
-                monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
-                               residual, friction_part, vp, bearing, joints + heads,
-                               theoretical, sign)
-                counts['monitor_samples'] += 1
+            released = self.settled.update(
+                stamp_ns, self.filter.restarts, measured - steady,
+                abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel,
+                (inertia, vp, bearing + joints + heads, theoretical, speed))
+            if released is not None:
+                self._monitor(*released)
+        else:
+            self.settled.update(stamp_ns, self.filter.restarts, math.nan, False, None)
         n = counts['estimates'] = counts['estimates'] + 1
         estimate = Estimate(stamp_ns, speed, dp, viscosity, theoretical, comps,
                             comps[0] + comps[1] + comps[2] + comps[3], inertia, accel,
@@ -398,6 +400,19 @@ class TorqueEstimator:
                             monitor.level, flags, (n - 1) % self._decimation == 0)
         self.last = estimate
         return estimate
+
+    def _monitor(self, stamp_ns: int, filtered_nm: float,
+                 payload: tuple[float, float, float, float, float]) -> None:
+        """Feed one settled sample (released by `SettledResidual`) to the wear monitor."""
+        inertia, vp, other, theoretical, speed = payload
+        sign = 1.0 if speed > 0.0 else -1.0
+        last = self._monitor_stamp_ns
+        # a clock restart (stamp resync) steps back: a new run for the monitor
+        gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
+        self._monitor_stamp_ns = stamp_ns
+        self.monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
+                            (filtered_nm - inertia) * sign, vp, other, theoretical, sign)
+        self.counts['monitor_samples'] += 1
 
     # -- diagnostics ----------------------------------------------------------------------
 

@@ -13,22 +13,32 @@
 # limitations under the License.
 
 """
-Valve-plate wear monitor: EWMA, two-sided CUSUM with hysteresis, and attribution.
+Valve-plate wear monitor: a healthy baseline, a CUSUM on the change from it, and isolation.
 
-Detection runs on the *friction-direction residual*: measured minus expected torque times
-the sign of the speed, so that "more friction than modelled" is positive in both directions
-of rotation.
+The monitor takes the *settled* residual (``settled_residual``): measured minus expected
+torque, aligned in time, in the friction direction (times the sign of the speed, so that
+"more friction" is positive in both directions), only in steady running. It averages it
+over windows of ``attribution_window_s`` of monitored running (one direction each, the
+steady stretches between transients joined; a window of fewer than `MIN_WINDOW_SAMPLES`
+is dropped), and each window mean is one measurement:
 
-* EWMA of the residual (time constant ``ewma_time_constant_s``), and of its square for a
-  running standard deviation.
-* Two-sided CUSUM weighted by time, so its thresholds do not depend on the sample rate:
-  S+ = max(0, S+ + (r - k) dt) and S- = max(0, S- + (-r - k) dt), in N m s. WARN when
-  max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at ``cusum_error_nm_s``; a level clears
-  only when the sum falls below ``cusum_clear_ratio`` times its threshold (hysteresis).
-  The sums are capped at ``CUSUM_CAP_RATIO`` times the ERROR threshold.
-* Attribution (``attribution.FrictionAttribution``): which term explains the residual
-  (valve plate, other friction, or a term that does not scale with friction), with honest
-  uncertainties and an identifiability check.
+1. **Commissioning.** The first ``baseline_learn_s`` of monitored running teach the
+   installation's healthy signature (``baseline``): friction levels, drive loss, torque
+   offset and gain against the model, and the window noise. No alarm is raised meanwhile
+   (the diagnostics say that the baseline is being learnt); the published scales are the
+   fit's, against the model.
+2. **Detection.** The change d = e - e_hat from the baseline's prediction feeds a two-sided
+   CUSUM weighted by time, so that the thresholds do not depend on the rates:
+   S+ = max(0, S+ + (d - k) T) and S- = max(0, S- + (-d - k) T), in N m s (T the window's
+   running). WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
+   ``cusum_error_nm_s``; a level clears only below ``cusum_clear_ratio`` times its
+   threshold (hysteresis). The sums are capped at `CUSUM_CAP_RATIO` times the ERROR
+   threshold. An EWMA of d gives the diagnostics a smoothed view.
+3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
+   zero, and the valve-plate and other friction scales relative to the healthy pump.
+
+`state_dict` / `load_state_dict` carry everything learnt (the baseline's sums, the sums,
+the level), so that the node keeps it across restarts (``baseline_file``).
 """
 
 from __future__ import annotations
@@ -37,17 +47,24 @@ from dataclasses import dataclass
 import math
 from typing import NamedTuple
 
-from .attribution import AttributionSettings, FrictionAttribution
+from .attribution import AttributionSettings, FaultIsolation, signatures, Verdict
+from .baseline import Baseline, baseline_regressors, BaselineLearner
 
-__all__ = ['ERROR', 'LEVEL_NAMES', 'OK', 'STALE', 'WARN', 'MonitorSettings', 'MonitorTrace',
-           'WearMonitor']
+__all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
+           'MonitorSettings', 'MonitorTrace', 'WearMonitor']
 
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 CUSUM_CAP_RATIO = 1.2
 """The sums are capped at this times the ERROR threshold, so that after a repair the level
 clears in a bounded time (about (1.2 - clear ratio x warn / error) x error / k seconds of
-monitored running); the node's ~/reset_monitor service clears it at once."""
+monitored running); the node's ~/reset_monitor service re-learns at once."""
 LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
+MIN_WINDOW_SAMPLES = 10
+"""A window with fewer monitored samples (a short burst between reversals) is not a
+measurement: its mean would carry more of the reversal than of the steady friction."""
+_MIN_LEVEL = 0.2
+"""A learnt friction level below this times the model's is not believed (the signature of
+a relative change is scaled by it)."""
 
 
 class MonitorTrace(NamedTuple):
@@ -71,93 +88,135 @@ class MonitorSettings:
     cusum_warn_nm_s: float
     cusum_error_nm_s: float
     cusum_clear_ratio: float
+    baseline_learn_s: float
 
 
 class WearMonitor:
     """
-    Stateful wear monitor; feed it one friction-direction sample at a time.
+    Stateful wear monitor; feed it one settled friction-direction sample at a time.
 
     Parameters
     ----------
     config : MonitorSettings
-        Tuning of the detection: the ``ewma_*`` and ``cusum_*`` parameters.
+        Tuning of the detection: ``ewma_*``, ``cusum_*`` and ``baseline_learn_s``.
     attribution : AttributionSettings
-        Tuning of the attribution.
+        Tuning of the baseline fit and the isolation.
+    drive_loss_nm : float
+        The configured drive loss [N m] (part of the torque-gain signature).
+    viscosity_assumed : bool
+        The oil viscosity is a parameter, not measured (changes the valve-plate verdict).
 
     """
 
-    def __init__(self, config: MonitorSettings, attribution: AttributionSettings) -> None:
+    STATE_VERSION = 2
+    """Version of `state_dict`'s layout; `load_state_dict` refuses others."""
+
+    def __init__(self, config: MonitorSettings, attribution: AttributionSettings,
+                 drive_loss_nm: float = 0.0, viscosity_assumed: bool = False) -> None:
         self.settings = config
+        self.attribution_settings = attribution
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
         self._h_warn = config.cusum_warn_nm_s
         self._h_error = config.cusum_error_nm_s
         self._clear = config.cusum_clear_ratio
         self._cap = CUSUM_CAP_RATIO * config.cusum_error_nm_s
-        self._dt = self._a = math.nan
-        self.attribution = FrictionAttribution(attribution)
+        self._window_s = attribution.attribution_window_s
+        self._learn_s = config.baseline_learn_s
+        self._drive_loss = drive_loss_nm
+        self._floor = attribution.scale_systematic_std
+        self.learner = BaselineLearner((attribution.scale_prior_std,) * 2
+                                       + (attribution.offset_prior_std_nm,) * 2
+                                       + (attribution.torque_gain_prior_std,))
+        self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self.reset()
 
+    # -- state ----------------------------------------------------------------------------
+
     def reset(self) -> None:
-        """Forget everything: the pump as modelled, no alarm."""
+        """Forget everything, the baseline included (after a repair): learn afresh."""
         self.samples = 0
+        self.windows = 0
+        self.learner.reset()
+        self.baseline: Baseline | None = None
+        self.fit: Baseline = self.learner.fit()
+        self.isolation.reset()
+        self._reset_detection()
+        self._open(0.0)
+
+    def _reset_detection(self) -> None:
         self.ewma_nm = 0.0
         self._var = 0.0
         self.cusum_pos_nm_s = 0.0
         self.cusum_neg_nm_s = 0.0
         self.level = OK
         self.alarm_onset_s = math.nan
-        self.attribution.reset()
+        self._publish_fit()
+
+    def _open(self, sign: float) -> None:
+        self._sign = sign
+        self._n = 0
+        self._time = 0.0
+        self._se = self._svp = self._so = self._sth = 0.0
 
     @property
     def residual_std_nm(self) -> float:
-        """Return the running standard deviation of the residual [N m]."""
+        """Return the running standard deviation of the change from the baseline [N m]."""
         return math.sqrt(self._var)
 
     @property
-    def theta_vp(self) -> float:
-        """Valve-plate friction scale estimate [-] (1: as modelled)."""
-        return self.attribution.values[0]
+    def learning(self) -> bool:
+        """Whether the healthy baseline is still being learnt (no alarm meanwhile)."""
+        return self.baseline is None
 
-    @property
-    def theta_rest(self) -> float:
-        """Friction scale estimate of the other components [-]."""
-        return self.attribution.values[1]
+    def baseline_status(self) -> str:
+        """Return the baseline's state in words (for /diagnostics)."""
+        if self.baseline is None:
+            return (f'learning the healthy baseline: {self.learner.learnt_s:.0f} of '
+                    f'{self._learn_s:.0f} s of monitored running; no alarm until then')
+        return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
 
-    @property
-    def valve_plate_scale_std(self) -> float:
-        """Return the standard deviation of the valve-plate friction scale estimate [-]."""
-        return self.attribution.stds[0]
-
-    @property
-    def rest_scale_std(self) -> float:
-        """Return the standard deviation of the other components' friction scale estimate [-]."""
-        return self.attribution.stds[1]
-
-    def update(self, t_s: float, dt_s: float, residual_nm: float, friction_nm: float,
-               valve_plate_nm: float, bearing_nm: float, pistons_nm: float,
-               theoretical_nm: float, sign: float) -> int:
+    def verdict(self, side: float) -> tuple[str, str]:
         """
-        Take one sample.
+        Return what explains the change on one side of the baseline, and the phrase.
+
+        Parameters
+        ----------
+        side : float
+            +1: torque above the baseline, -1: below.
+
+        Returns
+        -------
+        tuple of str
+            (`attribution.Verdict` value, explanation for the status message).
+
+        """
+        if self.baseline is None:
+            return Verdict.NONE, self.baseline_status()
+        verdict, words, _ = self.isolation.verdict(side)
+        return verdict, words
+
+    # -- samples --------------------------------------------------------------------------
+
+    def update(self, t_s: float, dt_s: float, residual_nm: float, valve_plate_nm: float,
+               other_nm: float, theoretical_nm: float, sign: float) -> int:
+        """
+        Take one settled sample.
 
         Parameters
         ----------
         t_s : float
             Sample time [s].
         dt_s : float
-            Time since the previous sample the monitor took [s] (0 after a gap).
+            Monitored time since the previous sample the monitor took [s] (0 after a gap).
         residual_nm : float
-            Measured - expected torque [N m] (not yet in the friction direction).
-        friction_nm : float
-            Friction part of the measured torque, friction direction [N m].
+            Settled residual, friction direction [N m].
         valve_plate_nm : float
             Modelled valve-plate friction magnitude [N m].
-        bearing_nm : float
-            Modelled shaft-bearing friction magnitude [N m].
-        pistons_nm : float
-            Modelled friction magnitude of the spherical joints and piston heads [N m].
+        other_nm : float
+            Modelled friction magnitude of the bearing, joints and piston heads [N m].
         theoretical_nm : float
-            Theoretical torque from the measured pressure [N m].
+            Theoretical torque V_g dp / 2 pi from the measured pressure [N m].
         sign : float
             Direction of rotation, +1 or -1.
 
@@ -168,49 +227,34 @@ class WearMonitor:
 
         """
         self.samples += 1
-        r = residual_nm * sign
-        if dt_s != self._dt:  # samples usually come evenly spaced: compute the factor once
-            self._dt = dt_s
-            self._a = 1.0 - math.exp(-dt_s / self._tau)
-        a = self._a
-        # EWMA of the residual and of its variance
-        dev = r - self.ewma_nm
-        self.ewma_nm += a * dev
-        self._var += a * (dev * dev - self._var)
-        # time-weighted two-sided CUSUM
-        k = self._k
-        pos = self.cusum_pos_nm_s + (r - k) * dt_s
-        neg = self.cusum_neg_nm_s + (-r - k) * dt_s
-        cap = self._cap
-        self.cusum_pos_nm_s = 0.0 if pos < 0.0 else (cap if pos > cap else pos)
-        self.cusum_neg_nm_s = 0.0 if neg < 0.0 else (cap if neg > cap else neg)
-        level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
-        if level != self.level:
-            if self.level == OK:
-                self.alarm_onset_s = t_s
-            elif level == OK:
-                self.alarm_onset_s = math.nan
-            self.level = level
-        self.attribution.add(t_s, dt_s, residual_nm, friction_nm, valve_plate_nm, bearing_nm,
-                             pistons_nm, theoretical_nm, sign)
-        return level
+        if sign != self._sign:
+            self._close(t_s)
+            self._open(sign)
+        self._n += 1
+        self._time += dt_s
+        self._se += residual_nm
+        self._svp += valve_plate_nm
+        self._so += other_nm
+        self._sth += theoretical_nm * sign
+        if self._time >= self._window_s:
+            self._close(t_s)
+            self._open(sign)
+        return self.level
 
     def update_many(self, t_s: list[float], dt_s: list[float], residual_nm: list[float],
-                    friction_nm: list[float], valve_plate_nm: list[float],
-                    bearing_nm: list[float], pistons_nm: list[float],
+                    valve_plate_nm: list[float], other_nm: list[float],
                     theoretical_nm: list[float], sign: list[float]) -> MonitorTrace:
         """
-        Take many samples in order: `update` for each, in lean loops (the chunk path).
+        Take many settled samples in order: `update` for each, in one lean loop.
 
-        The same operations in the same order as `update`; the EWMA, CUSUM and level do not
-        depend on the attribution nor it on them, so each runs over all the samples in one
-        loop. Results and state are identical to calling `update` sample by sample.
+        The same operations in the same order as `update`: results and state are identical
+        to calling it sample by sample.
 
         Parameters
         ----------
-        t_s, dt_s, residual_nm, friction_nm : list of float
-            Per sample, as `update` takes them [s, s, N m, N m].
-        valve_plate_nm, bearing_nm, pistons_nm, theoretical_nm : list of float
+        t_s, dt_s, residual_nm : list of float
+            Per sample, as `update` takes them [s, s, N m].
+        valve_plate_nm, other_nm, theoretical_nm : list of float
             Per sample, as `update` takes them [N m].
         sign : list of float
             Direction of rotation per sample, +1 or -1.
@@ -221,60 +265,121 @@ class WearMonitor:
             The monitor's state after each sample.
 
         """
-        tau, k, cap = self._tau, self._k, self._cap
-        last_dt, a = self._dt, self._a
-        ewma, var = self.ewma_nm, self._var
-        pos_sum, neg_sum = self.cusum_pos_nm_s, self.cusum_neg_nm_s
-        level, onset = self.level, self.alarm_onset_s
-        h_warn, h_error = self._h_warn, self._h_error
-        clear_warn, clear_error = self._clear * h_warn, self._clear * h_error
-        levels: list[int] = []
-        positive: list[float] = []
-        negative: list[float] = []
-        for t, dt, residual, sgn in zip(t_s, dt_s, residual_nm, sign, strict=True):
-            r = residual * sgn
-            if dt != last_dt:
-                last_dt = dt
-                a = 1.0 - math.exp(-dt / tau)
-            dev = r - ewma
-            ewma += a * dev
-            var += a * (dev * dev - var)
-            pos = pos_sum + (r - k) * dt
-            neg = neg_sum + (-r - k) * dt
-            pos_sum = 0.0 if pos < 0.0 else (cap if pos > cap else pos)
-            neg_sum = 0.0 if neg < 0.0 else (cap if neg > cap else neg)
-            s = max(pos_sum, neg_sum)  # `_level`, inline
-            if s >= h_error or (level == ERROR and s > clear_error):
-                new = ERROR
-            elif s >= h_warn or (level >= WARN and s > clear_warn):
-                new = WARN
-            else:
-                new = OK
-            if new != level:
-                if level == OK:
-                    onset = t
-                elif new == OK:
-                    onset = math.nan
-                level = new
-            levels.append(level)
-            positive.append(pos_sum)
-            negative.append(neg_sum)
-        self.samples += len(levels)
-        self._dt, self._a = last_dt, a
-        self.ewma_nm, self._var = ewma, var
-        self.cusum_pos_nm_s, self.cusum_neg_nm_s = pos_sum, neg_sum
-        self.level, self.alarm_onset_s = level, onset
-        scales, stds = self.attribution.add_many(t_s, dt_s, residual_nm, friction_nm,
-                                                 valve_plate_nm, bearing_nm, pistons_nm,
-                                                 theoretical_nm, sign)
-        return MonitorTrace(levels, positive, negative, *scales, *stds)
+        window = self._window_s
+        cur_sign, n, time = self._sign, self._n, self._time
+        se, svp, so, sth = self._se, self._svp, self._so, self._sth
+        # the state changes only when a window closes: kept as (from sample i, state) runs
+        runs = [(0, self._trace_state())]
+        for i, (t, dt, r, vp, other, th, sgn) in enumerate(zip(
+                t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign,
+                strict=True)):
+            if sgn != cur_sign:
+                self._sign, self._n, self._time, self._se, self._svp, self._so, self._sth = (
+                    cur_sign, n, time, se, svp, so, sth)
+                self._close(t)
+                cur_sign, n, time, se, svp, so, sth = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0
+                runs.append((i, self._trace_state()))
+            n += 1
+            time += dt
+            se += r
+            svp += vp
+            so += other
+            sth += th * sgn
+            if time >= window:
+                self._sign, self._n, self._time, self._se, self._svp, self._so, self._sth = (
+                    cur_sign, n, time, se, svp, so, sth)
+                self._close(t)
+                n, time, se, svp, so, sth = 0, 0.0, 0.0, 0.0, 0.0, 0.0
+                runs.append((i, self._trace_state()))
+        total = len(t_s)
+        self.samples += total
+        self._sign, self._n, self._time = cur_sign, n, time
+        self._se, self._svp, self._so, self._sth = se, svp, so, sth
+        columns: tuple[list, ...] = ([], [], [], [], [], [], [])
+        for (start, state), (end, _) in zip(runs, [*runs[1:], (total, ())], strict=True):
+            if end > start:
+                for column, value in zip(columns, state, strict=True):
+                    column.extend([value] * (end - start))
+        return MonitorTrace(*columns)
 
-    STATE_VERSION = 1
-    """Version of `state_dict`'s layout; `load_state_dict` refuses others."""
+    def _trace_state(self) -> tuple[int, float, float, float, float, float, float]:
+        return (self.level, self.cusum_pos_nm_s, self.cusum_neg_nm_s, self.theta_vp,
+                self.theta_rest, self.valve_plate_scale_std, self.rest_scale_std)
+
+    # -- windows --------------------------------------------------------------------------
+
+    def _close(self, t_s: float) -> None:
+        """Take the open window's mean as one measurement, if it holds enough samples."""
+        n, duration = self._n, self._time
+        if n < MIN_WINDOW_SAMPLES or not duration > 0.0:
+            return
+        inv = 1.0 / n
+        h = baseline_regressors(self._svp * inv, self._so * inv, self._sth * inv, self._sign)
+        e = self._se * inv
+        weight = duration / self._window_s
+        self.windows += 1
+        baseline = self.baseline
+        if baseline is None:
+            self.learner.add(h, e, weight, duration)
+            self.fit = self.learner.fit()
+            if self.learner.learnt_s >= self._learn_s:
+                self.baseline = self.fit
+                self._reset_detection()
+            else:
+                self._publish_fit()
+            return
+        d = e - baseline.predict(h)
+        var = baseline.window_var_nm2 / weight + baseline.prediction_var(h)
+        a = 1.0 - math.exp(-duration / self._tau)
+        dev = d - self.ewma_nm
+        self.ewma_nm += a * dev
+        self._var += a * (dev * dev - self._var)
+        k, cap = self._k, self._cap
+        was_pos, was_neg = self.cusum_pos_nm_s == 0.0, self.cusum_neg_nm_s == 0.0
+        self.cusum_pos_nm_s = min(max(self.cusum_pos_nm_s + (d - k) * duration, 0.0), cap)
+        self.cusum_neg_nm_s = min(max(self.cusum_neg_nm_s + (-d - k) * duration, 0.0), cap)
+        self.isolation.add(signatures(baseline, h, self._drive_loss), d, 1.0 / var, duration,
+                           self.cusum_pos_nm_s > 0.0, self.cusum_neg_nm_s > 0.0, was_pos,
+                           was_neg)
+        level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
+        if level != self.level:
+            if self.level == OK:
+                self.alarm_onset_s = t_s
+            elif level == OK:
+                self.alarm_onset_s = math.nan
+            self.level = level
+        side = 1.0 if self.cusum_pos_nm_s >= self.cusum_neg_nm_s else -1.0
+        self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
+            self.isolation.scales(side, baseline)
+
+    def _publish_fit(self) -> None:
+        """Publish the scales: the fit against the model while learning, 1 once learnt."""
+        floor = self._floor
+        if self.baseline is not None:
+            self.theta_vp = self.theta_rest = 1.0
+            self.valve_plate_scale_std = self.rest_scale_std = floor
+            return
+        coef, std = self.fit.coefficients, self.fit.std()
+        self.theta_vp = 1.0 + float(coef[0])
+        self.theta_rest = 1.0 + float(coef[1])
+        self.valve_plate_scale_std = math.hypot(float(std[0]), floor)
+        self.rest_scale_std = math.hypot(float(std[1]), floor)
+
+    def _level(self, s: float) -> int:
+        if s >= self._h_error or (self.level == ERROR and s > self._clear * self._h_error):
+            return ERROR
+        if s >= self._h_warn or (self.level >= WARN and s > self._clear * self._h_warn):
+            return WARN
+        return OK
+
+    # -- persistence ----------------------------------------------------------------------
 
     def state_dict(self) -> dict[str, object]:
         """
         Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
+
+        The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
+        and the isolation's sums; not the open window (a fraction of a second).
 
         Returns
         -------
@@ -283,7 +388,12 @@ class WearMonitor:
 
         """
         return {'version': self.STATE_VERSION, 'samples': self.samples,
-                'cusum_pos_nm_s': self.cusum_pos_nm_s, 'cusum_neg_nm_s': self.cusum_neg_nm_s}
+                'windows': self.windows, 'learner': self.learner.state(),
+                'baseline_complete': self.baseline is not None,
+                'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
+                'cusum_pos_nm_s': self.cusum_pos_nm_s, 'cusum_neg_nm_s': self.cusum_neg_nm_s,
+                'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
+                'isolation': self.isolation.state()}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -297,22 +407,42 @@ class WearMonitor:
         Raises
         ------
         ValueError
-            A state of another version, or missing or malformed entries.
+            A state of another version, or missing or malformed entries (the monitor is
+            then left as it was).
 
         """
-        if state.get('version') != self.STATE_VERSION:
-            raise ValueError(f'monitor state version {state.get("version")!r}, '
-                             f'expected {self.STATE_VERSION}')
+        if not isinstance(state, dict) or state.get('version') != self.STATE_VERSION:
+            version = state.get('version') if isinstance(state, dict) else None
+            raise ValueError(f'monitor state version {version!r}, expected '
+                             f'{self.STATE_VERSION}')
+        saved = self.state_dict()
         try:
-            self.samples = int(state['samples'])  # type: ignore[call-overload]
-            self.cusum_pos_nm_s = float(state['cusum_pos_nm_s'])  # type: ignore[arg-type]
-            self.cusum_neg_nm_s = float(state['cusum_neg_nm_s'])  # type: ignore[arg-type]
-        except (KeyError, TypeError, ValueError) as exc:
+            self._load(state)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            self._load(saved)
             raise ValueError(f'malformed monitor state: {exc}') from None
 
-    def _level(self, s: float) -> int:
-        if s >= self._h_error or (self.level == ERROR and s > self._clear * self._h_error):
-            return ERROR
-        if s >= self._h_warn or (self.level >= WARN and s > self._clear * self._h_warn):
-            return WARN
-        return OK
+    def _load(self, state: dict[str, object]) -> None:
+        self.learner.load(state['learner'])  # type: ignore[arg-type]
+        self.isolation.load(state['isolation'])  # type: ignore[arg-type]
+        self.samples = int(state['samples'])  # type: ignore[call-overload]
+        self.windows = int(state['windows'])  # type: ignore[call-overload]
+        self.fit = self.learner.fit()
+        self.baseline = self.fit if state['baseline_complete'] else None
+        floats = [float(state[key]) for key in (  # type: ignore[arg-type]
+            'ewma_nm', 'ewma_var_nm2', 'cusum_pos_nm_s', 'cusum_neg_nm_s', 'alarm_onset_s')]
+        if not all(math.isfinite(x) for x in floats[:4]):
+            raise ValueError('monitor sums not finite')
+        self.ewma_nm, self._var, self.cusum_pos_nm_s, self.cusum_neg_nm_s, \
+            self.alarm_onset_s = floats
+        level = int(state['level'])  # type: ignore[call-overload]
+        if level not in (OK, WARN, ERROR):
+            raise ValueError(f'monitor level {level}')
+        self.level = level
+        self._open(0.0)
+        if self.baseline is None:
+            self._publish_fit()
+        else:
+            side = 1.0 if self.cusum_pos_nm_s >= self.cusum_neg_nm_s else -1.0
+            self.theta_vp, self.valve_plate_scale_std, self.theta_rest, \
+                self.rest_scale_std = self.isolation.scales(side, self.baseline)

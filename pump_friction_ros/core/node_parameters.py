@@ -169,39 +169,47 @@ class EstimatorConfig:
         '(the inertia torque, 0.2 N m there at 2e-4 kg m^2, must be known well).', 0.0, _INF)
     ewma_time_constant_s: float = _param(2.0, "Time constant of the residual's EWMA [s].",
                                          1e-3, 1e5)
-    cusum_drift_nm: float = _param(0.1, 'CUSUM allowance k: friction residual tolerated '
+    cusum_drift_nm: float = _param(0.05, 'CUSUM allowance k: friction residual tolerated '
                                    'without accumulating [N m].', 0.0, 100.0)
     cusum_warn_nm_s: float = _param(1.5, 'CUSUM level (integral of residual beyond k) for '
                                     'WARN [N m s].', 1e-6, 1e6)
     cusum_error_nm_s: float = _param(5.0, 'CUSUM level for ERROR [N m s].', 1e-6, 1e6)
     cusum_clear_ratio: float = _param(0.5, 'A level clears when the CUSUM falls below this '
                                       'fraction of its threshold (hysteresis).', 0.0, 1.0)
+    monitor_settle_s: float = _param(
+        0.05, 'The wear monitor takes a sample only after this much steady running (above the '
+        'minimum speed, below the acceleration limit, torque fresh): the filters have '
+        'forgotten the last transient [s].', 0.0, 60.0)
+    monitor_lookahead_s: float = _param(
+        0.02, 'A sample is monitored only once the steady running has gone on this long after '
+        'it: the filtered acceleration sees a jerk a few milliseconds late [s].', 0.0, 10.0)
+    baseline_learn_s: float = _param(
+        30.0, 'Monitored running that teaches the healthy baseline (commissioning); no alarm '
+        'until it is learnt [s].', 1.0, 1e7)
     attribution_window_s: float = _param(
-        0.25, 'Monitored running averaged into one measurement of the attribution filter '
-        '[s].', 0.01, 60.0)
-    scale_prior_std: float = _param(0.5, 'Prior standard deviation of the friction scale '
-                                    'factors [-].', 1e-3, 100.0)
-    scale_random_walk_per_sqrt_s: float = _param(
-        0.01, 'Random walk of the friction scales: how fast wear may change them [1/sqrt(s)].',
-        0.0, 10.0)
+        0.25, 'Monitored running averaged into one measurement of the baseline and the '
+        'isolation [s].', 0.01, 60.0)
+    scale_prior_std: float = _param(0.5, 'Prior standard deviation of the friction levels '
+                                    'against the model in the baseline fit [-].', 1e-3, 100.0)
     offset_prior_std_nm: float = _param(
-        0.3, 'Prior standard deviation of an extra drive loss and of a torque-sensor offset '
-        '[N m].', 1e-4, 100.0)
-    offset_random_walk_nm_per_sqrt_s: float = _param(
-        0.002, 'Random walk of the drive loss and torque offset [N m/sqrt(s)].', 0.0, 10.0)
-    pressure_gain_prior_std: float = _param(
-        0.1, 'Prior standard deviation of a pressure-sensor gain error [-].', 1e-4, 10.0)
-    pressure_gain_random_walk_per_sqrt_s: float = _param(
-        0.0005, 'Random walk of the pressure-sensor gain error [1/sqrt(s)].', 0.0, 10.0)
-    model_error_ratio: float = _param(
-        0.02, 'Model error of one window mean, as a fraction of the modelled friction [-].',
-        0.0, 1.0)
+        0.3, 'Prior standard deviation of an extra drive loss and of a torque offset in the '
+        'baseline fit [N m].', 1e-4, 100.0)
+    torque_gain_prior_std: float = _param(
+        0.1, 'Prior standard deviation of the gain error of the measured torque against the '
+        'theoretical one (torque constant, pressure sensor) in the baseline fit [-].', 1e-4,
+        10.0)
     attribution_z: float = _param(
-        3.0, 'A term explains the residual when it deviates from the model by this many '
-        'standard deviations [-].', 0.5, 20.0)
+        3.0, 'A single cause explains the change when its likelihood-ratio statistic reaches '
+        'z^2 and leads the runner-up by z^2 [standard deviations].', 0.5, 20.0)
     identifiability_correlation: float = _param(
-        0.9, '|posterior correlation| of two terms from which the duty cycle cannot tell '
-        'them apart [-].', 0.1, 1.0)
+        0.98, "|cosine| of two causes' signatures over the points seen from which the duty "
+        'cycle cannot tell them apart [-].', 0.1, 1.0)
+    isolation_memory_s: float = _param(
+        120.0, 'Memory of the isolation: older windows since the change weigh exp(-age / '
+        'this) [s of monitored running].', 1.0, 1e7)
+    scale_systematic_std: float = _param(
+        0.05, 'Floor of the standard deviation of a reported friction scale: model error '
+        'that does not average away [-].', 0.0, 10.0)
     stale_timeout_s: float = _param(0.5, 'No estimate for this long: diagnostics STALE [s].',
                                     1e-3, 3600.0)
     output_decimation: int = _param(10, 'Publish every N-th estimate (1 kHz in, 100 Hz out '

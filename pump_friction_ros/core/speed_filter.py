@@ -81,6 +81,9 @@ class SpeedFilter:
         self._coefficients = (0.0, 0.0, 0.0)
         self._last_ns: int | None = None
         self.accel_rad_s2 = 0.0
+        self.restarts = 0
+        """(Re)starts so far: a filter that follows this one (``settled_residual``) restarts
+        with it."""
 
     def update(self, stamp_ns: int, speed_rad_s: float) -> float:
         """
@@ -107,6 +110,7 @@ class SpeedFilter:
         if last is None or not 0 < stamp_ns - last <= self.max_gap_ns:
             self._lp1 = self._lp2 = self._x_prev = speed_rad_s  # (re)start at rest
             self.accel_rad_s2 = 0.0
+            self.restarts += 1
             return 0.0
         step_ns = stamp_ns - last
         if step_ns != self._step_ns:  # evenly spaced samples: coefficients once
@@ -121,7 +125,8 @@ class SpeedFilter:
         self.accel_rad_s2 = (self._lp1 - self._lp2) / self.tau_s
         return self.accel_rad_s2
 
-    def update_many(self, stamps_ns: list[int], speeds_rad_s: list[float]) -> list[float]:
+    def update_many(self, stamps_ns: list[int], speeds_rad_s: list[float]
+                    ) -> tuple[list[float], list[int]]:
         """
         Take many speed samples in order: `update` for each, in one loop (the chunk path).
 
@@ -137,11 +142,14 @@ class SpeedFilter:
 
         Returns
         -------
-        list of float
-            Filtered acceleration after each sample [rad/s^2].
+        tuple of list
+            Filtered acceleration after each sample [rad/s^2], and `restarts` after each.
 
         """
         tau, max_gap = self.tau_s, self.max_gap_ns
+        restarts = self.restarts
+        counts: list[int] = []
+        count = counts.append
         last, step_prev = self._last_ns, self._step_ns
         lp1, lp2, x_prev, accel = self._lp1, self._lp2, self._x_prev, self.accel_rad_s2
         b, a, c = self._coefficients
@@ -151,6 +159,7 @@ class SpeedFilter:
             if last is None or not 0 < stamp - last <= max_gap:
                 lp1 = lp2 = x_prev = x  # (re)start at rest
                 accel = 0.0
+                restarts += 1
             else:
                 step = stamp - last
                 if step != step_prev:
@@ -163,10 +172,12 @@ class SpeedFilter:
                 accel = (lp1 - lp2) / tau
             last = stamp
             append(accel)
+            count(restarts)
+        self.restarts = restarts
         self._last_ns, self._step_ns = last, step_prev
         self._lp1, self._lp2, self._x_prev, self.accel_rad_s2 = lp1, lp2, x_prev, accel
         self._coefficients = (b, a, c)
-        return out
+        return out, counts
 
 
 def filter_two_stage(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:

@@ -95,7 +95,7 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
     attribution = 'none'
     if level != OK:
         side = 1.0 if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else -1.0
-        verdict = mon.attribution.verdict(side)[0]
+        verdict = mon.verdict(side)[0]
         attribution = 'cannot_tell' if verdict == Verdict.NONE else verdict
     return MonitorReading(level, attribution, mon.theta_vp, mon.valve_plate_scale_std,
                           mon.theta_rest, mon.rest_scale_std)

@@ -281,18 +281,16 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
                                    sens.encoder_offset_rad)
     # the truths the report needs, where the monitor learns (true speed and acceleration)
     config = eha_estimator_config(scenario)
-    node_visc = visc if s.temperature.topic else config.oil_viscosity_m2_s
-    model = table.lookup_array(speed, dp, node_visc)
     gate = (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
         (np.abs(run.accel_rad_s2) <= config.monitor_max_accel_rad_s2)
-    vp_end = float(np.atleast_1d(factors['valve_plate'])[-1])
-    vp_truth = vp_end * _ratio(np.abs(true['valve_plate_nm'][gate]),
-                               np.abs(model['valve_plate_nm'][gate]))
+    # the truths are relative to the healthy true pump: the monitor reports the change
+    # from its learnt baseline (other friction: the healthy-weighted ratio of its parts)
+    vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
     other_true = sum(float(np.atleast_1d(factors[c])[-1]) * np.abs(true[f'{c}_nm'][gate])
                      for c in COMPONENTS[1:])
-    other_model = sum(np.abs(model[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
-    other_truth = _ratio(np.asarray(other_true), np.asarray(other_model))
-    del true, model, delivered
+    other_healthy = sum(np.abs(true[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
+    other_truth = _ratio(np.asarray(other_true), np.asarray(other_healthy))
+    del true, delivered
     # message streams: bursts hit every stream of the bus; drops and duplicates per message
     windows = bursts(scenario.duration_s, sens.burst_rate_per_h, s.sensors.burst_length_s, rng)
     joint = message_indices(t, sens.drop_probability, sens.duplicate_probability, windows, rng)

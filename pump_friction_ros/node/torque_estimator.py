@@ -258,7 +258,7 @@ class TorqueEstimatorNode(Node):
                   ) -> Trigger.Response:
         self.core.reset_monitor()
         response.success = True
-        response.message = 'wear monitor reset: friction as modelled, no alarm'
+        response.message = 'wear monitor reset: the healthy baseline is learnt afresh, no alarm'
         return response
 
 

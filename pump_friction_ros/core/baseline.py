@@ -1,0 +1,217 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The installation's healthy signature, learnt from its own monitored running.
+
+No real pump matches its model and no torque measurement is exact: a torque constant off by
+3 % alone puts 0.2-0.45 N m between the measured and the modelled torque at 70-150 bar,
+more than the wear monitor's allowance. Condition monitoring therefore compares the pump
+with itself. During commissioning (the first ``baseline_learn_s`` of monitored running) the
+window means of the monitored residual e (friction direction, ``settled_residual``) are
+fitted by a Bayesian linear regression on
+
+    e = b_vp T_vp + b_o T_o + L + c s + g T_th s + noise
+
+with T_vp, T_o the modelled valve-plate and other friction magnitudes, L an extra drive
+loss, c a torque offset (s the direction of rotation), g a gain error of the measured
+torque against the theoretical one V_g dp / 2 pi (torque constant or pressure sensor). The
+priors (``scale_prior_std``, ``offset_prior_std_nm``, ``torque_gain_prior_std``, zero
+mean: the pump as modelled) keep terms the duty cycle cannot separate where the prior puts
+them; the prediction e_hat = h b, which is all detection needs, is good wherever the
+duty cycle has been. The window noise variance is the fit's own residual variance (the
+window-to-window scatter, systematic model error included), each window weighted by its
+length.
+
+The fit's sufficient statistics are sums (``A = sum w h h^T``, ``sum w h e``, ``sum w e^2``):
+they are what the node persists, so learning resumes after a restart where it stopped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+__all__ = ['BASELINE_TERMS', 'Baseline', 'BaselineLearner', 'baseline_regressors']
+
+BASELINE_TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
+                  'torque_gain')
+"""Coefficients of the healthy signature, in regressor order: relative friction changes
+[-], torques [N m], a relative gain error [-]."""
+N_TERMS = len(BASELINE_TERMS)
+
+
+def baseline_regressors(vp_nm: float, other_nm: float, theoretical_s_nm: float,
+                        sign: float) -> np.ndarray:
+    """
+    Return the regressors h of one window (`BASELINE_TERMS` order).
+
+    Parameters
+    ----------
+    vp_nm, other_nm : float
+        Window means of the modelled valve-plate and other friction magnitudes [N m].
+    theoretical_s_nm : float
+        Window mean of the theoretical torque times the direction of rotation [N m].
+    sign : float
+        Direction of rotation of the window, +1 or -1.
+
+    Returns
+    -------
+    ndarray
+        h, such that the window's residual is h . b [N m].
+
+    """
+    return np.array([vp_nm, other_nm, 1.0, sign, theoretical_s_nm])
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """
+    A learnt healthy signature: coefficients, their covariance, and the window noise.
+
+    Attributes
+    ----------
+    coefficients : ndarray
+        b in `BASELINE_TERMS` order.
+    covariance : ndarray
+        Posterior covariance of b.
+    window_var_nm2 : float
+        Residual variance of a window of the nominal length about the fit [N m^2].
+    learnt_s : float
+        Monitored running the fit is made of [s].
+
+    """
+
+    coefficients: np.ndarray
+    covariance: np.ndarray
+    window_var_nm2: float
+    learnt_s: float
+
+    def predict(self, h: np.ndarray) -> float:
+        """Return the healthy residual e_hat = h . b of a window with regressors ``h`` [N m]."""
+        return float(h @ self.coefficients)
+
+    def prediction_var(self, h: np.ndarray) -> float:
+        """Return the variance of `predict` from the uncertainty of b [N m^2]."""
+        return float(h @ self.covariance @ h)
+
+    def std(self) -> np.ndarray:
+        """Return the posterior standard deviations of b (`BASELINE_TERMS` order)."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+
+class BaselineLearner:
+    """
+    Sufficient statistics of the baseline fit, window by window.
+
+    Parameters
+    ----------
+    prior_std : sequence of float
+        Prior standard deviation of each coefficient (`BASELINE_TERMS` order).
+
+    """
+
+    def __init__(self, prior_std: tuple[float, ...]) -> None:
+        self.prior_precision = np.diag(1.0 / np.asarray(prior_std, dtype=float) ** 2)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every window."""
+        self.a = np.zeros((N_TERMS, N_TERMS))
+        self.b = np.zeros(N_TERMS)
+        self.c = 0.0
+        self.weight = 0.0
+        self.windows = 0
+        self.learnt_s = 0.0
+
+    def add(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
+        """
+        Add one window.
+
+        Parameters
+        ----------
+        h : ndarray
+            Its regressors (`baseline_regressors`).
+        e_nm : float
+            Its mean residual [N m].
+        weight : float
+            Its length over the nominal window length [-].
+        duration_s : float
+            Its monitored running [s].
+
+        """
+        self.a += weight * np.outer(h, h)
+        self.b += weight * e_nm * h
+        self.c += weight * e_nm * e_nm
+        self.weight += weight
+        self.windows += 1
+        self.learnt_s += duration_s
+
+    def fit(self) -> Baseline:
+        """
+        Return the posterior of the coefficients, the noise variance estimated from the fit.
+
+        Returns
+        -------
+        Baseline
+            The fit of the windows so far (the prior's mean where none).
+
+        """
+        var = 0.01  # [N m^2] a first guess; two passes settle it
+        coef = np.zeros(N_TERMS)
+        cov = np.diag(1.0 / np.diag(self.prior_precision))
+        for _ in range(3):
+            precision = self.a / var + self.prior_precision
+            cov = np.linalg.inv(precision)
+            coef = cov @ (self.b / var)
+            sse = self.c - 2.0 * float(coef @ self.b) + float(coef @ self.a @ coef)
+            dof = self.weight - float(np.trace(cov @ self.a) / var)
+            if dof <= 1.0:
+                break
+            var = max(sse / dof, 1e-12)
+        return Baseline(coef, 0.5 * (cov + cov.T), var, self.learnt_s)
+
+    def state(self) -> dict[str, object]:
+        """Return the sums as plain values (for the baseline file)."""
+        return {'a': self.a.tolist(), 'b': self.b.tolist(), 'c': self.c,
+                'weight': self.weight, 'windows': self.windows, 'learnt_s': self.learnt_s}
+
+    def load(self, state: dict[str, object]) -> None:
+        """
+        Restore `state`'s sums.
+
+        Parameters
+        ----------
+        state : dict
+            A `state` result.
+
+        Raises
+        ------
+        ValueError
+            Missing, malformed or non-finite sums.
+
+        """
+        a = np.asarray(state['a'], dtype=float)
+        b = np.asarray(state['b'], dtype=float)
+        if a.shape != (N_TERMS, N_TERMS) or b.shape != (N_TERMS,) or \
+                not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            raise ValueError('baseline sums of the wrong shape or not finite')
+        c, weight = float(state['c']), float(state['weight'])  # type: ignore[arg-type]
+        learnt = float(state['learnt_s'])  # type: ignore[arg-type]
+        if not all(math.isfinite(x) and x >= 0.0 for x in (c, weight, learnt)):
+            raise ValueError('baseline sums negative or not finite')
+        self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
+        self.windows = int(state['windows'])  # type: ignore[call-overload]
