@@ -204,7 +204,8 @@ def test_irregular_chunks_give_exactly_what_on_input_gives(table, run, speed, to
                                                            pressure, viscosity):
     config = dataclasses.replace(EstimatorConfig(), speed_source=speed, torque_source=torque,
                                  pressure_source=pressure, viscosity_source=viscosity,
-                                 drive_loss_torque_nm=0.05, baseline_learn_s=0.5)
+                                 drive_loss_torque_nm=0.05, baseline_learn_s=0.3,
+                                 cusum_drift_nm=1.0)
     index = SOURCE_COMBOS.index((speed, torque, pressure, viscosity))
     arrays = message_stream(run, config, seed=index)
     rng = np.random.default_rng(100 + index)

@@ -175,7 +175,8 @@ def record(family='trapezoid', fault='valve_plate_x1.6', truth_class='valve_plat
             'alarm_entries_before_onset': 0, 'first_alarm_s': math.nan, 'final_level': OK,
             'attribution': 'none', 'vp_scale': 1.0, 'vp_std': 0.01, 'other_scale': 1.0,
             'other_std': 0.01, 'vp_truth': 1.6, 'other_truth': 1.0, 'other_truth_exact': True,
-            'monitored_fraction': 0.5, 'above_min_speed_fraction': 0.8}
+            'monitored_fraction': 0.5, 'above_min_speed_fraction': 0.8,
+            'monitored_delay_s': math.inf}
     base.update(kw)
     return RunRecord(**base)
 

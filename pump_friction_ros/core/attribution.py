@@ -31,17 +31,19 @@ drive_loss          1 (opposes the motion)                       [N m]
 ==================  ===========================================  =====================
 
 (l_vp = 1 + b_vp and l_o = 1 + b_o from the baseline: a change relative to the healthy
-pump.) Over the windows since the change (those since the alarmed CUSUM last left zero,
-with a memory of ``isolation_memory_s``), each weighted by its inverse noise variance, the
-generalised likelihood ratio of cause j against no change is T_j = (sum s_j d)^2 / sum
-s_j^2 (Basseville & Nikiforov 1993, ch. 7; Isermann 2006, ch. 15). The largest names the
-cause when it stands out (T_j >= z^2) and leads the runner-up k by z^2 in T (a likelihood
-ratio of exp(z^2 / 2)). Where s_j and s_k are collinear over the points seen (|cos| >=
-``identifiability_correlation``) no amount of these data tells them apart and the
-verdict says so, naming both. A change of the oil's viscosity scales the valve plate's
-film shear exactly like wear: with the viscosity a parameter the valve-plate verdict
-reads "valve plate or oil viscosity"; with the temperature topic the model follows the
-viscosity and it does not.
+pump.) Over the windows since the change (those since the alarmed CUSUM last left zero, with
+a memory of ``isolation_memory_s``), each weighted by its inverse noise variance, the
+generalised likelihood ratio of cause j against no change is T_j = (sum s_j d)^2 / sum s_j^2
+(Basseville & Nikiforov 1993, ch. 7; Isermann 2006, ch. 15). The largest names the cause
+when it stands out (T_j >= z^2) and leads the runner-up k by z^2 in T (a likelihood ratio of
+exp(z^2 / 2)). The noise variance in T is scaled by the lack of fit of the best single cause
+(an F-test: systematic model error is not white noise and must not pass for evidence). Where
+the lead is short and s_j and s_k are collinear over the points seen (|cos| >=
+``identifiability_correlation``) these data cannot tell them apart and the verdict says so,
+naming both; where they are not collinear, more running will. A change of the oil's
+viscosity scales the valve plate's film shear exactly like wear: with the viscosity a
+parameter the valve-plate verdict reads "valve plate or oil viscosity"; with the temperature
+topic the model follows the viscosity and it does not.
 
 The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standard
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
@@ -132,12 +134,21 @@ class _SideStats:
     def clear(self) -> None:
         self.g = np.zeros((_N, _N))
         self.b = np.zeros(_N)
+        self.c = 0.0
+        self.count = 0.0  # windows, forgotten as the sums are
         self.windows = 0
 
     def add(self, s: np.ndarray, d: float, w: float, keep: float) -> None:
         self.g = keep * self.g + w * np.outer(s, s)
         self.b = keep * self.b + w * d * s
+        self.c = keep * self.c + w * d * d
+        self.count = keep * self.count + 1.0
         self.windows += 1
+
+    def lack_of_fit(self, t_best: float) -> float:
+        """Return the residual variance about the best single cause, in noise units (>= 1)."""
+        dof = self.count - 1.0
+        return max(1.0, (self.c - t_best) / dof) if dof >= 1.0 else 1.0
 
 
 class FaultIsolation:
@@ -207,8 +218,9 @@ class FaultIsolation:
         Returns
         -------
         tuple of ndarray
-            T_j [-], delta_j, std of delta_j (noise only) (`CAUSES` order; NaN where the
-            windows carry no signature).
+            T_j [-], delta_j, std of delta_j (noise and lack of fit) (`CAUSES` order; NaN
+            where the windows carry no signature). T_j and the std are scaled by the lack of
+            fit of the best single cause, so that model error does not pass for evidence.
 
         """
         stats = self.sides[side]
@@ -216,9 +228,12 @@ class FaultIsolation:
         ok = gjj > 0.0
         safe = np.where(ok, gjj, 1.0)
         t = np.where(ok, stats.b ** 2 / safe, math.nan)
+        # an F-test rather than a chi-square: the noise scaled by how badly even the best
+        # single cause fits (systematic model error is not white noise)
+        inflation = stats.lack_of_fit(float(np.nanmax(t)) if ok.any() else 0.0)
         delta = np.where(ok, stats.b / safe, math.nan)
-        std = np.where(ok, 1.0 / np.sqrt(safe), math.nan)
-        return t, delta, std
+        std = np.where(ok, np.sqrt(inflation / safe), math.nan)
+        return t / inflation, delta, std
 
     def verdict(self, side: float) -> tuple[str, str, int]:
         """
@@ -247,9 +262,9 @@ class FaultIsolation:
             return Verdict.NONE, 'no single cause stands out yet', -1
         g = stats.g
         cos = float(g[j, k] / math.sqrt(g[j, j] * g[k, k])) if g[k, k] > 0.0 else 0.0
-        tied = abs(cos) >= self.settings.identifiability_correlation
         close = not t[j] - t[k] >= z2
-        if (tied or close) and _CLASS[j] == _CLASS[k] == Verdict.NOT_FRICTION:
+        tied = close and abs(cos) >= self.settings.identifiability_correlation
+        if close and _CLASS[j] == _CLASS[k] == Verdict.NOT_FRICTION:
             return (Verdict.NOT_FRICTION, f'not friction: {_WORDS[CAUSES[j]]} or '
                     f'{_WORDS[CAUSES[k]]}', j)
         if tied:
@@ -314,7 +329,8 @@ class FaultIsolation:
 
     def state(self) -> dict[str, object]:
         """Return the sums of both sides as plain values."""
-        return {str(int(side)): {'g': s.g.tolist(), 'b': s.b.tolist(), 'windows': s.windows}
+        return {str(int(side)): {'g': s.g.tolist(), 'b': s.b.tolist(), 'c': s.c,
+                                 'count': s.count, 'windows': s.windows}
                 for side, s in self.sides.items()}
 
     def load(self, state: dict[str, object]) -> None:
@@ -339,4 +355,6 @@ class FaultIsolation:
             if g.shape != (_N, _N) or b.shape != (_N,) or not np.all(np.isfinite(g)):
                 raise ValueError('isolation sums of the wrong shape or not finite')
             stats.g, stats.b = g, b
+            stats.c = float(entry['c'])  # type: ignore[index]
+            stats.count = float(entry['count'])  # type: ignore[index]
             stats.windows = int(entry['windows'])  # type: ignore[index]

@@ -111,13 +111,15 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('valve_plate_scale_std', mon.valve_plate_scale_std),
         ('other_friction_scale', mon.theta_rest),
         ('other_friction_scale_std', mon.rest_scale_std),
-        ('baseline_status', mon.baseline_status()),
+        ('baseline_learnt_s', mon.learner.learnt_s),
+        ('baseline_learn_s', mon.settings.baseline_learn_s),
+        ('baseline_complete', int(not mon.learning)),
     ]
     fit = mon.baseline if mon.baseline is not None else mon.fit
     for name, value, std in zip(BASELINE_TERMS, fit.coefficients, fit.std(), strict=True):
-        offset = 1.0 if name in _RELATIVE else 0.0  # a relative change shown as a factor
-        values += [(f'baseline_{name}', float(value) + offset),
-                   (f'baseline_{name}_std', float(std))]
+        relative = name in _RELATIVE  # a relative change, shown as a factor
+        key = f'baseline_{name}_scale' if relative else f'baseline_{name}'
+        values += [(key, float(value) + (1.0 if relative else 0.0)), (f'{key}_std', float(std))]
     values.append(('baseline_window_std_nm', math.sqrt(fit.window_var_nm2)))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]

@@ -22,13 +22,14 @@ over windows of ``attribution_window_s`` of monitored running (one direction eac
 steady stretches between transients joined; a window of fewer than `MIN_WINDOW_SAMPLES`
 is dropped), and each window mean is one measurement:
 
-1. **Commissioning.** The first ``baseline_learn_s`` of monitored running teach the
+1. **Commissioning.** ``baseline_learn_s`` of stationary monitored running teach the
    installation's healthy signature (``baseline``): friction levels, drive loss, torque
-   offset and gain against the model, and the window noise. No alarm is raised meanwhile
-   (the diagnostics say that the baseline is being learnt); the published scales are the
-   fit's, against the model.
-2. **Detection.** The change d = e - e_hat from the baseline's prediction feeds a two-sided
-   CUSUM weighted by time, so that the thresholds do not depend on the rates:
+   offset and gain against the model, and the window noise. Stationary: the fits of its
+   two halves agree (``_learn``); while the oil warms up they do not, and learning goes
+   on. No alarm is raised meanwhile (the diagnostics say that the baseline is being
+   learnt); the published scales are the fit's, against the model.
+2. **Detection.** The change d = e - e_hat from the baseline's prediction feeds a
+   two-sided CUSUM weighted by time, so that the thresholds do not depend on the rates:
    S+ = max(0, S+ + (d - k) T) and S- = max(0, S- + (-d - k) T), in N m s (T the window's
    running). WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
    ``cusum_error_nm_s``; a level clears only below ``cusum_clear_ratio`` times its
@@ -46,6 +47,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 from typing import NamedTuple
+
+import numpy as np
 
 from .attribution import AttributionSettings, FaultIsolation, signatures, Verdict
 from .baseline import Baseline, baseline_regressors, BaselineLearner
@@ -125,9 +128,11 @@ class WearMonitor:
         self._learn_s = config.baseline_learn_s
         self._drive_loss = drive_loss_nm
         self._floor = attribution.scale_systematic_std
-        self.learner = BaselineLearner((attribution.scale_prior_std,) * 2
-                                       + (attribution.offset_prior_std_nm,) * 2
-                                       + (attribution.torque_gain_prior_std,))
+        prior = ((attribution.scale_prior_std,) * 2 + (attribution.offset_prior_std_nm,) * 2
+                 + (attribution.torque_gain_prior_std,))
+        self.learner = BaselineLearner(prior)
+        self.older = BaselineLearner(prior)  # the halves of the stationarity check
+        self.recent = BaselineLearner(prior)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self.reset()
 
@@ -138,6 +143,12 @@ class WearMonitor:
         self.samples = 0
         self.windows = 0
         self.learner.reset()
+        self.older.reset()
+        self.recent.reset()
+        self.restarts = 0
+        """Times the commissioning dropped its older half: the pump was still changing."""
+        self.drift_nm = math.nan
+        """RMS difference of the two halves' predictions at the last check [N m]."""
         self.baseline: Baseline | None = None
         self.fit: Baseline = self.learner.fit()
         self.isolation.reset()
@@ -172,8 +183,10 @@ class WearMonitor:
     def baseline_status(self) -> str:
         """Return the baseline's state in words (for /diagnostics)."""
         if self.baseline is None:
+            still = f' (still changing: restarted {self.restarts} times, last drift ' \
+                f'{self.drift_nm:.3f} N m)' if self.restarts else ''
             return (f'learning the healthy baseline: {self.learner.learnt_s:.0f} of '
-                    f'{self._learn_s:.0f} s of monitored running; no alarm until then')
+                    f'{self._learn_s:.0f} s of monitored running{still}; no alarm until then')
         return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
 
     def verdict(self, side: float) -> tuple[str, str]:
@@ -320,13 +333,7 @@ class WearMonitor:
         self.windows += 1
         baseline = self.baseline
         if baseline is None:
-            self.learner.add(h, e, weight, duration)
-            self.fit = self.learner.fit()
-            if self.learner.learnt_s >= self._learn_s:
-                self.baseline = self.fit
-                self._reset_detection()
-            else:
-                self._publish_fit()
+            self._learn(h, e, weight, duration)
             return
         d = e - baseline.predict(h)
         var = baseline.window_var_nm2 / weight + baseline.prediction_var(h)
@@ -351,6 +358,42 @@ class WearMonitor:
         side = 1.0 if self.cusum_pos_nm_s >= self.cusum_neg_nm_s else -1.0
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(side, baseline)
+
+    def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
+        """
+        Add a commissioning window; complete the baseline once it is learnt and stationary.
+
+        The windows fill two halves of ``baseline_learn_s / 2`` each. When both are full,
+        the fits of each half are compared over the operating points of the second: where
+        their predictions differ by more than half the CUSUM allowance (RMS), the pump was
+        still changing (oil warming up, running in) and the first half is dropped: learning
+        goes on with the second. Otherwise the baseline is the fit of both.
+        """
+        self.recent.add(h, e_nm, weight, duration_s)
+        self.learner.add(h, e_nm, weight, duration_s)
+        self.fit = self.learner.fit()
+        if self.recent.learnt_s < 0.5 * self._learn_s:
+            self._publish_fit()
+            return
+        if self.learner.learnt_s - self.recent.learnt_s < 0.5 * self._learn_s:
+            self.older.load(self.recent.state())  # the first half is full
+            self.recent.reset()
+            self._publish_fit()
+            return
+        first, second = self.older.fit(), self.recent.fit()
+        change = first.coefficients - second.coefficients
+        moments = self.recent.a / max(self.recent.weight, 1e-300)
+        self.drift_nm = math.sqrt(max(float(change @ moments @ change), 0.0))
+        if self.drift_nm <= 0.5 * self._k:
+            self.baseline = self.fit
+            self._reset_detection()
+            return
+        self.learner.load(self.recent.state())  # still changing: keep the second half
+        self.older.load(self.recent.state())
+        self.recent.reset()
+        self.restarts += 1
+        self.fit = self.learner.fit()
+        self._publish_fit()
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, 1 once learnt."""
@@ -389,6 +432,8 @@ class WearMonitor:
         """
         return {'version': self.STATE_VERSION, 'samples': self.samples,
                 'windows': self.windows, 'learner': self.learner.state(),
+                'older': self.older.state(), 'recent': self.recent.state(),
+                'restarts': self.restarts, 'drift_nm': self.drift_nm,
                 'baseline_complete': self.baseline is not None,
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
                 'cusum_pos_nm_s': self.cusum_pos_nm_s, 'cusum_neg_nm_s': self.cusum_neg_nm_s,
@@ -424,6 +469,10 @@ class WearMonitor:
 
     def _load(self, state: dict[str, object]) -> None:
         self.learner.load(state['learner'])  # type: ignore[arg-type]
+        self.older.load(state['older'])  # type: ignore[arg-type]
+        self.recent.load(state['recent'])  # type: ignore[arg-type]
+        self.restarts = int(state['restarts'])  # type: ignore[call-overload]
+        self.drift_nm = float(state['drift_nm'])  # type: ignore[arg-type]
         self.isolation.load(state['isolation'])  # type: ignore[arg-type]
         self.samples = int(state['samples'])  # type: ignore[call-overload]
         self.windows = int(state['windows'])  # type: ignore[call-overload]

@@ -126,6 +126,8 @@ class RunRecord:
     monitored_fraction: float  # joint-state samples the monitor learnt from
     above_min_speed_fraction: float  # joint-state samples with |speed| >= monitor min speed
 
+    monitored_delay_s: float  # monitored running from the onset to the first alarm; inf: none
+
     @property
     def delay_s(self) -> float:
         """Return the detection delay from the onset [s]; inf when not detected."""
@@ -265,8 +267,13 @@ def prepare_true_tables(scenarios: list[Scenario]) -> int:
 
 
 def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
-          ) -> tuple[int, int | None]:
-    """Feed the signals in stamp order; return alarm entries before the onset, first alarm."""
+          ) -> tuple[int, int | None, int]:
+    """
+    Feed the signals in stamp order.
+
+    Returns alarm entries before the onset, the first alarm's stamp, and the monitored
+    samples between the onset and that alarm (or the end).
+    """
     stamps = [np.round(x * 1e9).astype(np.int64)
               for x in (sim.temperature_t_s, sim.pressure_t_s, sim.t_s)]
     kinds = np.concatenate([np.full(s.size, k, dtype=np.int8) for k, s in enumerate(stamps)])
@@ -277,7 +284,9 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
     on_input = core.on_input  # the node's one entry point, as its callbacks call it
     temperature, pressure, joint = (InputKind.OIL_TEMPERATURE, InputKind.LOAD_PRESSURE,
                                     InputKind.JOINT_STATE)
-    previous, before, first = OK, 0, None
+    previous, before, first, monitored = OK, 0, None, 0
+    counts = core.counts
+    at_onset = -1
     for start in range(0, order.size, _CHUNK):
         part = order[start:start + _CHUNK]
         for ns, kind, value, tq in zip(stamp[part].tolist(), kinds[part].tolist(),
@@ -287,6 +296,8 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                 est = on_input(joint, ns, value, tq, ns)
                 if est is None:
                     continue
+                if at_onset < 0 and ns >= onset_ns:
+                    at_onset = counts['monitor_samples']
                 level = est.level  # the level the node publishes with this estimate
                 if level != previous:
                     if previous == OK and ns < onset_ns:
@@ -294,11 +305,14 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                     previous = level
                 if level and first is None and ns >= onset_ns:
                     first = ns
+                    monitored = counts['monitor_samples'] - at_onset
             elif kind == 1:
                 on_input(pressure, ns, value, None, ns)
             else:
                 on_input(temperature, ns, value, None, ns)
-    return before, first
+    if first is None:
+        monitored = counts['monitor_samples'] - max(at_onset, 0)
+    return before, first, monitored
 
 
 def run_scenario(scenario: Scenario) -> RunRecord:
@@ -321,7 +335,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
     core = TorqueEstimator(scenario.estimator_config(), table, params.oil.viscosity_m2_s,
                            params.name)
     onset_ns = scenario.onset_s * 1e9
-    before, first = _feed(core, sim, onset_ns)
+    before, first, monitored = _feed(core, sim, onset_ns)
+    period_s = float(sim.t_s[1] - sim.t_s[0])
     reading = read_monitor(core)
     fault = scenario.fault
     return RunRecord(
@@ -335,7 +350,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         other_std=reading.other_std, vp_truth=sim.vp_truth, other_truth=sim.other_truth,
         other_truth_exact=sim.other_truth_exact,
         monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,
-        above_min_speed_fraction=sim.above_min_speed_fraction)
+        above_min_speed_fraction=sim.above_min_speed_fraction,
+        monitored_delay_s=math.inf if first is None else monitored * period_s)
 
 
 def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,
