@@ -237,17 +237,23 @@ def _cmd_build_table(args: argparse.Namespace) -> int:
     from ..table.table_files import cached_table_path
 
     params = load_pump(args.pump)
-    spec = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
-                     max_pressure_pa=bar_to_pa(args.max_pressure_bar),
-                     min_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[0]),
-                     max_viscosity_m2_s=cst_to_m2_s(args.viscosity_cst[1]))
+    base = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
+                     max_pressure_pa=bar_to_pa(args.max_pressure_bar))
+    if args.viscosity_cst is None:  # what the node builds with its default parameters
+        from ..core.node_parameters import EstimatorConfig
+        from ..core.oil_range import table_spec_for
+
+        spec = table_spec_for(EstimatorConfig(), params.oil.viscosity_m2_s, base)
+    else:
+        spec = base.covering(cst_to_m2_s(args.viscosity_cst[0]),
+                             cst_to_m2_s(args.viscosity_cst[1]))
     outputs = StagedOutputs()
     try:
         if args.out:  # checked and made before the build; moved into place at the end
             staged = outputs.add(args.out, args.force, False)
             out, path = staged.target, staged.path
         else:  # the cache is rebuilt in place (it is a cache; saved atomically)
-            out = path = cached_table_path(params)
+            out = path = cached_table_path(params, spec)
         with ProgressBar('building table', enabled=not args.quiet) as bar:
             table = build_table(params, spec, progress=bar)
         table.save(path)
@@ -344,8 +350,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--max-pressure-bar', type=_bounded_float('--max-pressure-bar', 1.0,
                                                              MAX_PRESSURE_BAR), default=350.0,
                    metavar='P', help='pressure-difference envelope [bar] (default 350)')
-    p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=[10.0, 100.0],
-                   metavar=('LOW', 'HIGH'), help='viscosity range [cSt] (default 10 100)')
+    p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=None,
+                   metavar=('LOW', 'HIGH'),
+                   help="viscosity range [cSt], 8 nodes per decade (default: the node's with "
+                   'its default parameters, ISO VG 46 from 250 degC to 1000 cSt)')
     p.add_argument('--force', action='store_true', help='replace an existing --out file')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_cmd_build_table)

@@ -16,8 +16,9 @@
 Core: the ROS-free estimator the node and the replay share.
 
 Node parameters (`node_parameters`, declared once), the input table (`inputs`), the
-estimate record, the speed filter, the wear monitor and its attribution, the diagnostics
-snapshot and `TorqueEstimator`, whose `on_input` is the one entry point.
+viscosity range the friction table covers (`oil_range`), the estimate record, the speed
+filter, the wear monitor and its attribution, the diagnostics snapshot and
+`TorqueEstimator`, whose `on_input` is the one entry point.
 
 May import: table, physics, base.
 """

@@ -23,7 +23,8 @@ from .baseline import BASELINE_TERMS
 from .estimate_record import COUNTERS, Estimate
 from .monitor import LEVEL_NAMES, OK, STALE, WearMonitor
 from ..physics.model import COMPONENTS
-from ..table.friction_table import describe_flags, NOT_FINITE
+from ..physics.units import m2_s_to_cst
+from ..table.friction_table import describe_flags, NOT_FINITE, VISCOSITY_CLAMPED
 
 __all__ = ['DiagnosticSnapshot', 'format_value', 'level_message',
            'snapshot']
@@ -42,7 +43,8 @@ class DiagnosticSnapshot:
 
 
 def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
-             stale_timeout_s: float, stale_reason: str, now_ns: int) -> DiagnosticSnapshot:
+             stale_timeout_s: float, stale_reason: str, now_ns: int,
+             table_viscosity_m2_s: tuple[float, float] | None = None) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -60,6 +62,10 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         Why the latest sample made no estimate.
     now_ns : int
         Current time of the node's clock (or of the replay) [ns].
+    table_viscosity_m2_s : tuple of float, optional
+        Ends of the table's viscosity axis [m^2/s]: while the latest estimate's oil is
+        outside them, the message says so with the viscosity and the range (once, in the
+        status, for as long as it lasts; each sample is counted in ``clamped_to_table``).
 
     Returns
     -------
@@ -77,8 +83,14 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     else:
         level = mon.level
         message = level_message(level, mon)
-    if est is not None and est.table_flags & ~NOT_FINITE:
-        message += f'; outside the table: {describe_flags(est.table_flags)}'
+    flags = 0 if est is None else est.table_flags & ~NOT_FINITE
+    if est is not None and flags & VISCOSITY_CLAMPED and table_viscosity_m2_s is not None:
+        low, high = (m2_s_to_cst(v) for v in table_viscosity_m2_s)
+        message += (f'; oil viscosity {m2_s_to_cst(est.viscosity_m2_s):.4g} cSt outside the '
+                    f'table ({low:.4g}-{high:.4g} cSt): torque taken at the edge')
+        flags &= ~VISCOSITY_CLAMPED
+    if flags:
+        message += f'; outside the table: {describe_flags(flags)}'
     nan = math.nan
     values: list[tuple[str, float | int | str]] = [
         ('level', level),

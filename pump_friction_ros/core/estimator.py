@@ -68,6 +68,7 @@ from .node_parameters import (
     TorqueSource,
     ViscositySource,
 )
+from .oil_range import coverage_warning, table_spec_for
 from .settled_residual import SettledResidual
 from .speed_filter import SpeedFilter
 from ..paths import resolve_path
@@ -115,6 +116,8 @@ class TorqueEstimator:
         self.table = table
         self.pump_name = pump_name
         self._viscosity_m2_s = config.viscosity_m2_s(default_viscosity_m2_s)
+        # one line where the table's viscosity axis falls short of the oil; '' if it covers
+        self.table_coverage = coverage_warning(table, config, default_viscosity_m2_s)
         self._walther = WaltherViscosity(config.oil_viscosity_40c_m2_s,
                                          config.oil_viscosity_100c_m2_s)
         self._max_age_ns = round(config.max_input_age_s * 1e9)
@@ -431,13 +434,17 @@ class TorqueEstimator:
             Level, message and key-values.
 
         """
+        axis = self.table.viscosity_axis_m2_s
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
-                        self.last_stale_reason, now_ns)
+                        self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])))
 
 
 def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:
     """
     Build the estimator a config describes: pump file, table (given or cached), tuning.
+
+    The cached table's viscosity axis covers the configured oil (``oil_range``); a given
+    ``table_file`` that does not is used all the same, with ``table_coverage`` saying so.
 
     Parameters
     ----------
@@ -459,5 +466,6 @@ def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:
     """
     params = load_pump(config.pump_file or None)
     table = load_table(resolve_path(config.table_file, 'table_file', must_exist=False), params) \
-        if config.table_file else cached_table(params)
+        if config.table_file else cached_table(
+            params, spec=table_spec_for(config, params.oil.viscosity_m2_s))
     return TorqueEstimator(config, table, params.oil.viscosity_m2_s, params.name)

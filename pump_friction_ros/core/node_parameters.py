@@ -143,6 +143,11 @@ class EstimatorConfig:
                                            'temperature law (ISO VG 46: 46e-6).', 1e-7, 1e-2)
     oil_viscosity_100c_m2_s: float = _param(6.8e-6, 'Viscosity at 100 degC [m^2/s] for the '
                                             'temperature law (ISO VG 46: 6.8e-6).', 1e-7, 1e-2)
+    cold_start_viscosity_m2_s: float = _param(
+        1.0e-3, "Pump maker's cold-start limit of the oil viscosity [m^2/s] (1000 cSt for axial "
+        'piston units): the friction table covers the oil from its viscosity at 250 degC up to '
+        'this, and oil_viscosity_m2_s; beyond, /diagnostics says the oil is outside the table.',
+        1e-5, 1e-2)
     max_input_age_s: float = _param(0.05, 'An input older than this is stale: no estimate is '
                                     'made [s].', 1e-4, 60.0)
     max_stamp_lead_s: float = _param(

@@ -194,10 +194,14 @@ class TorqueEstimatorNode(Node):
         self.create_service(Trigger, '~/reset_monitor', self._on_reset)
         self.create_timer(1.0 / cfg.diagnostics_rate_hz, self._on_diagnostics_timer)
         self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
+        axis_cst = self.core.table.viscosity_axis_m2_s[[0, -1]] * 1e6
         self.get_logger().info(
-            f'pump {self.core.pump_name}, table {self.core.table.metadata.get("source")}; '
+            f'pump {self.core.pump_name}, table {self.core.table.metadata.get("source")} '
+            f'(viscosity {axis_cst[0]:.3g}-{axis_cst[1]:.4g} cSt); '
             f'inputs: speed {cfg.speed_source}, torque {cfg.torque_source}, pressure '
             f'{cfg.pressure_source}, viscosity {cfg.viscosity_source}')
+        if self.core.table_coverage:
+            self.get_logger().warning(self.core.table_coverage)
 
     # -- conversions at the edge ----------------------------------------------------------
 

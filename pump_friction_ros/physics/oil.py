@@ -64,3 +64,21 @@ class WaltherViscosity:
         """
         z = self._a - self._b * math.log10(temperature_c + _KELVIN)
         return (10.0 ** (10.0 ** z) - 0.7) * 1e-6
+
+    def temperature_c(self, viscosity_m2_s: float) -> float:
+        """
+        Temperature at which the oil has a given viscosity: the law solved for T.
+
+        Parameters
+        ----------
+        viscosity_m2_s : float
+            Kinematic viscosity [m^2/s], above 0.3 cSt (the law's log log needs nu + 0.7 > 1).
+
+        Returns
+        -------
+        float
+            Oil temperature [degC].
+
+        """
+        z = math.log10(math.log10(viscosity_m2_s * 1e6 + 0.7))
+        return 10.0 ** ((self._a - z) / self._b) - _KELVIN

@@ -17,17 +17,26 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+import hashlib
 import json
 import os
 from pathlib import Path
 
 import numpy as np
 
-from .friction_table import _ARRAYS, _validate_arrays, build_table, FrictionTable, TABLE_FORMAT
+from .friction_table import (
+    _ARRAYS,
+    _validate_arrays,
+    build_table,
+    FrictionTable,
+    TABLE_FORMAT,
+    TableSpec,
+)
 from .. import MODEL_VERSION
 from ..errors import TableError
 from ..physics.model import COMPONENTS
 from ..physics.pump_parameters import PumpParams
+from ..physics.units import m2_s_to_cst
 
 __all__ = ['cache_dir', 'cached_table', 'cached_table_path', 'load_table']
 
@@ -110,34 +119,41 @@ def cache_dir() -> Path:
     return Path(root) / 'pump_friction_ros'
 
 
-def cached_table_path(params: PumpParams) -> Path:
+def cached_table_path(params: PumpParams, spec: TableSpec | None = None) -> Path:
     """
-    Return where the default table of ``params`` is cached.
+    Return where the table of ``params`` on the grid ``spec`` is cached.
 
-    The file name holds the pump name, its parameter hash and the model version, so a
-    changed pump file or model never meets a stale table.
+    The file name holds the pump name, its parameter hash, the viscosity axis' ends, a hash
+    of the whole grid and the model version, so a changed pump file, another oil or a new
+    model never meets a stale table.
 
     Parameters
     ----------
     params : PumpParams
         The pump.
+    spec : TableSpec, optional
+        The grid (default `TableSpec()`); the node's covers its oil (``core.oil_range``).
 
     Returns
     -------
     Path
-        ``<cache dir>/<name>-<hash>-m<model version>.npz``.
+        ``<cache dir>/<name>-<hash>-nu<low>-<high>cSt-s<grid hash>-m<model version>.npz``.
 
     """
-    return cache_dir() / f'{params.name}-{params.sha256[:16]}-m{MODEL_VERSION}.npz'
+    spec = spec or TableSpec()
+    key = hashlib.sha256(repr(spec).encode()).hexdigest()[:8]
+    low, high = m2_s_to_cst(spec.min_viscosity_m2_s), m2_s_to_cst(spec.max_viscosity_m2_s)
+    return cache_dir() / (f'{params.name}-{params.sha256[:16]}-nu{low:.3g}-{high:.4g}cSt-'
+                          f's{key}-m{MODEL_VERSION}.npz')
 
 
-def cached_table(params: PumpParams, progress: Callable[[float], None] | None = None
-                 ) -> FrictionTable:
+def cached_table(params: PumpParams, progress: Callable[[float], None] | None = None,
+                 spec: TableSpec | None = None) -> FrictionTable:
     """
-    Return the default table for ``params``: from the cache, or built and cached.
+    Return the table of ``params`` on the grid ``spec``: from the cache, or built and cached.
 
-    The cache file is `cached_table_path`'s, so a changed pump file or model never meets a
-    stale table.
+    The cache file is `cached_table_path`'s, so a changed pump file, oil or model never meets
+    a stale table; an entry whose axes are not the grid's is rebuilt.
 
     Parameters
     ----------
@@ -145,6 +161,8 @@ def cached_table(params: PumpParams, progress: Callable[[float], None] | None = 
         The pump.
     progress : callable, optional
         Build progress callback (fraction done), used only when building.
+    spec : TableSpec, optional
+        The grid (default `TableSpec()`: 10-100 cSt).
 
     Returns
     -------
@@ -152,13 +170,18 @@ def cached_table(params: PumpParams, progress: Callable[[float], None] | None = 
         The table.
 
     """
-    path = cached_table_path(params)
+    spec = spec or TableSpec()
+    path = cached_table_path(params, spec)
     if path.exists():
         try:
-            return load_table(path, params)
+            table = load_table(path, params)
+            if all(np.array_equal(a, b) for a, b in zip(
+                    (table.speed_axis_rad_s, table.pressure_axis_pa, table.viscosity_axis_m2_s),
+                    spec.axes(params), strict=True)):
+                return table
         except TableError:
             pass  # corrupt or foreign cache entry: rebuild it below
-    table = build_table(params, progress=progress)
+    table = build_table(params, spec, progress=progress)
     table.metadata['source'] = str(path)
     try:
         table.save(path)
