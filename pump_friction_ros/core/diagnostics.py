@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 import math
 
@@ -39,7 +40,9 @@ class DiagnosticSnapshot:
 
 
 def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
-             stale_timeout_s: float, stale_reason: str, now_ns: int) -> DiagnosticSnapshot:
+             stale_timeout_s: float, stale_reason: str, now_ns: int,
+             extra: Sequence[tuple[str, float | int | str]] = (), note: str = ''
+             ) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -57,6 +60,10 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         Why the latest sample made no estimate.
     now_ns : int
         Current time of the node's clock (or of the replay) [ns].
+    extra : sequence of (str, value)
+        More key-values, after the counters (the baseline file's, `BaselineStore.diagnostics`).
+    note : str
+        Appended to the message after ``; `` when not empty (e.g. the baseline file not used).
 
     Returns
     -------
@@ -76,6 +83,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         message = level_message(level, mon)
     if est is not None and est.table_flags & ~NOT_FINITE:
         message += f'; outside the table: {describe_flags(est.table_flags)}'
+    if note:
+        message += f'; {note}'
     nan = math.nan
     values: list[tuple[str, float | int | str]] = [
         ('level', level),
@@ -108,6 +117,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         values += [(key, float(value) + offset), (f'{key}_std', float(std))]
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]
+    values += extra
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
 
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 import math
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -77,6 +77,9 @@ from ..physics.pump_parameters import load_pump
 from ..table.exact_lookup import ExactTableLookup
 from ..table.friction_table import FrictionTable
 from ..table.table_files import cached_table, load_table
+
+if TYPE_CHECKING:
+    from .baseline_store import BaselineStore
 
 __all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
 
@@ -138,6 +141,7 @@ class TorqueEstimator:
                                    settings_view(config, AttributionSettings))
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
+        self.baseline: BaselineStore | None = None  # its status goes into the diagnostics
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
         handlers = {InputKind.JOINT_STATE: self._on_joint_state,
                     InputKind.SHAFT_SPEED: self._on_speed,
@@ -169,6 +173,33 @@ class TorqueEstimator:
         """Forget the wear monitor's state (after a repair): friction as modelled, no alarm."""
         self.monitor.reset()
         self._monitor_stamp_ns: int | None = None
+        # what the monitor learnt from since this reset, across restarts (`learnt`)
+        self._learnt_first_ns: int | None = None
+        self._learnt_last_ns: int | None = None  # before the restart (a baseline file)
+        self._learnt_offset = -self.counts['monitor_samples']
+
+    @property
+    def learnt(self) -> tuple[int, int | None, int | None]:
+        """Return samples learnt since the monitor's reset (restarts too), first, last [ns]."""
+        last = self._monitor_stamp_ns
+        return (self._learnt_offset + self.counts['monitor_samples'], self._learnt_first_ns,
+                self._learnt_last_ns if last is None else last)
+
+    def restore_monitor(self, state: dict[str, object], samples: int, first_ns: int | None,
+                        last_ns: int | None) -> None:
+        """
+        Restore the monitor's state and `learnt` as saved before a restart (a baseline file).
+
+        A state the monitor refuses raises its ValueError, the monitor reset, never half loaded.
+        """
+        self.reset_monitor()
+        try:
+            self.monitor.load_state_dict(state)
+        except ValueError:
+            self.reset_monitor()
+            raise
+        self._learnt_offset += samples
+        self._learnt_first_ns, self._learnt_last_ns = first_ns, last_ns
 
     # -- inputs ---------------------------------------------------------------------------
 
@@ -238,8 +269,20 @@ class TorqueEstimator:
             the estimates (`EstimateColumns`: ``rows()`` gives the `Estimate` objects).
 
         """
-        return estimate_chunk(self, kinds, stamps, log_times, values, torques, has_value,
-                              has_torque, defects)
+        result = estimate_chunk(self, kinds, stamps, log_times, values, torques, has_value,
+                                has_torque, defects)
+        if self._learnt_first_ns is None and self._monitor_stamp_ns is not None:
+            self._learnt_first_ns = self._first_monitored_ns(result[1])
+        return result
+
+    def _first_monitored_ns(self, estimates: EstimateColumns) -> int | None:
+        """Return the stamp of the first estimate the monitor took (`_estimate`'s rule)."""
+        monitored = np.flatnonzero(
+            np.isfinite(estimates.column('residual_nm'))
+            & (np.abs(estimates.column('speed_rad_s')) >= self._monitor_min_speed)
+            & (np.abs(estimates.column('accel_rad_s2')) <= self._monitor_max_accel))
+        return int(estimates.column('stamp_ns')[monitored[0]]) if monitored.size \
+            else self._monitor_stamp_ns
 
     def _chunk_lookup(self) -> ExactTableLookup:
         """Return the chunk path's table lookup, made on first use."""
@@ -382,6 +425,8 @@ class TorqueEstimator:
             if abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel:
                 sign = 1.0 if speed > 0.0 else -1.0
                 last = self._monitor_stamp_ns
+                if last is None and self._learnt_first_ns is None:
+                    self._learnt_first_ns = stamp_ns
                 # a clock restart (stamp resync) steps back: a new run for the monitor
                 gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
                 self._monitor_stamp_ns = stamp_ns
@@ -416,8 +461,9 @@ class TorqueEstimator:
             Level, message and key-values.
 
         """
+        extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
-                        self.last_stale_reason, now_ns)
+                        self.last_stale_reason, now_ns, extra, note)
 
 
 def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:
