@@ -346,6 +346,8 @@ def test_archive_moves_the_file_aside_and_keeps_earlier_backups(tmp_path):
     two = archive_baseline(path)
     assert not path.exists() and one != two
     assert (one.read_text(), two.read_text()) == ('first', 'second')
+    with pytest.raises(OutputError, match='is a folder'):
+        archive_baseline(tmp_path)
 
 
 def test_default_file_is_under_ros_home_named_after_the_node(monkeypatch, tmp_path):

@@ -424,9 +424,11 @@ def archive_baseline(path: Path) -> Path | None:
     Raises
     ------
     OutputError
-        It cannot be moved (one line, with the reason).
+        It is a folder or cannot be moved (one line, with the reason).
 
     """
+    if path.is_dir():
+        raise OutputError(f'baseline file {path} is a folder: not moved aside')
     stamp = time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())
     target = path.with_name(f'{path.name}.{stamp}.bak')
     n = 1
