@@ -16,8 +16,8 @@
 
 from typing import Any
 
-__all__ = ['BagError', 'CalibrationError', 'ConfigError', 'OutputError', 'PumpFrictionError',
-           'TableError', 'UsageError', 'quote']
+__all__ = ['BagError', 'BaselineError', 'BaselineMismatchError', 'CalibrationError',
+           'ConfigError', 'OutputError', 'PumpFrictionError', 'TableError', 'UsageError', 'quote']
 
 
 class PumpFrictionError(Exception):
@@ -42,6 +42,14 @@ class OutputError(PumpFrictionError):
 
 class CalibrationError(PumpFrictionError):
     """Unusable calibration input: no samples, NaN, inconsistent units, too few points."""
+
+
+class BaselineError(PumpFrictionError, ValueError):
+    """A healthy-baseline file is missing, unreadable, corrupt or of another format version."""
+
+
+class BaselineMismatchError(BaselineError):
+    """A healthy-baseline file was learnt on another pump, table or node parameters."""
 
 
 class UsageError(PumpFrictionError):

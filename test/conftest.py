@@ -38,6 +38,12 @@ PAPER_PUMP = REPO / 'config' / 'pumps' / 'hong_doh_2004.yaml'
 CONSISTENT_PUMP = REPO / 'config' / 'pumps' / 'hong_doh_2004_consistent.yaml'
 
 
+@pytest.fixture(autouse=True)
+def _own_ros_home(tmp_path_factory, monkeypatch):
+    """Each test its own ROS_HOME: a node's default baseline file never outlives its test."""
+    monkeypatch.setenv('ROS_HOME', str(tmp_path_factory.mktemp('ros_home')))
+
+
 @pytest.fixture(scope='session')
 def paper_params():
     return load_pump(PAPER_PUMP)

@@ -28,6 +28,7 @@ from typing import Any, NoReturn, TYPE_CHECKING
 import numpy as np
 
 from . import data_commands
+from .baseline_commands import add_baseline_commands
 from ..errors import PumpFrictionError, UsageError
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
@@ -382,6 +383,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--plots', metavar='DIR', default=None, help='folder for PNG plots')
     p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW',
                    help="the node's topic OLD is NEW in the bag")
+    p.add_argument('--baseline', metavar='FILE', default=None,
+                   help="start the wear monitor from this healthy baseline file (the node's "
+                   "baseline_file, or learn-baseline's); every bag starts from it")
     p.add_argument('--storage', choices=('sqlite3', 'mcap'), default=None,
                    help="output bag storage (default: the input's)")
     p.add_argument('--compression', choices=('auto', 'none', 'zstd'), default='auto',
@@ -394,6 +398,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help='run the bags on this Dask scheduler (extra [fleet])')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=data_commands.cmd_replay)
+
+    add_baseline_commands(sub)
 
     p = sub.add_parser('make-sample-bags', help='write the simulated sample bags')
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')

@@ -48,10 +48,17 @@ def cmd_replay(args: argparse.Namespace) -> int:
     single = len(bags) == 1
     labels = [bag.name for bag in bags] if single else output_names(bags)
     plan = plan_outputs(bags, args.out, args.csv, args.plots)
+    baseline = str(Path(args.baseline).expanduser().resolve()) if args.baseline else None
+    if baseline is not None:
+        from ..core.baseline_file import read_baseline
+
+        read_baseline(Path(baseline))  # unreadable: one line before any bag is replayed
+        notes.append(f'the wear monitor started from the baseline file {baseline}')
     jobs = [ReplayJob(bag=str(bag.resolve()), config=cfg, out_bag=out, csv_path=csv,
                       plots_dir=plots, remaps=remaps, storage=args.storage,
                       compression=args.compression, force=args.force,
-                      progress=single and not args.quiet and not args.dask, label=label)
+                      progress=single and not args.quiet and not args.dask, label=label,
+                      baseline=baseline)
             for bag, cfg, out, csv, plots, label in zip(bags, configs, plan.out_bags,
                                                         plan.csv_paths, plan.plots_dirs,
                                                         labels, strict=True)]

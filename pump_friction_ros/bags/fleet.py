@@ -45,6 +45,8 @@ from typing import Any, cast
 
 from .replay import replay_bag, ReplaySummary
 from .sources import stop_process
+from ..core.baseline_store import BaselineStore
+from ..core.estimator import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
@@ -253,6 +255,7 @@ class ReplayJob:
     force: bool = False
     progress: bool = False
     label: str = ''
+    baseline: str | None = None  # start from this learnt healthy baseline file
 
 
 def run_job(job: ReplayJob) -> ReplaySummary:
@@ -271,10 +274,14 @@ def run_job(job: ReplayJob) -> ReplaySummary:
 
     """
     try:
+        core = None
+        if job.baseline:
+            core = estimator_from_config(job.config)
+            core.baseline = BaselineStore.opened(Path(job.baseline), core)
         summary = replay_bag(job.bag, job.config, out_bag=job.out_bag, csv_path=job.csv_path,
                              plots_dir=job.plots_dir, remaps=dict(job.remaps),
                              storage=job.storage, compression=job.compression,
-                             force=job.force, progress=job.progress)
+                             force=job.force, progress=job.progress, core=core)
     except PumpFrictionError as exc:
         summary = ReplaySummary(bag=job.bag, error=str(exc))
     except Exception as exc:

@@ -426,6 +426,8 @@ def _monitor(core: TorqueEstimator, released: list[tuple[int, float, tuple[
     times, gaps, residuals, vps, others, theoreticals, signs = (
         [], [], [], [], [], [], [])
     last = core._monitor_stamp_ns
+    if last is None and core._learnt_first_ns is None:
+        core._learnt_first_ns = released[0][0]
     max_dt = core._monitor_max_dt
     inf = math.inf
     for stamp, filtered, (inertia, vp, other, theoretical, speed) in released:

@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 import math
 
@@ -44,7 +45,9 @@ class DiagnosticSnapshot:
 
 def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
              stale_timeout_s: float, stale_reason: str, now_ns: int,
-             table_viscosity_m2_s: tuple[float, float] | None = None) -> DiagnosticSnapshot:
+             table_viscosity_m2_s: tuple[float, float] | None = None,
+             extra: Sequence[tuple[str, float | int | str]] = (), note: str = ''
+             ) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -66,6 +69,10 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         Ends of the table's viscosity axis [m^2/s]: while the latest estimate's oil is
         outside them, the message says so with the viscosity and the range (once, in the
         status, for as long as it lasts; each sample is counted in ``clamped_to_table``).
+    extra : sequence of (str, value)
+        More key-values, after the counters (the baseline file's, `BaselineStore.diagnostics`).
+    note : str
+        Appended to the message after ``; `` when not empty (e.g. the baseline file not used).
 
     Returns
     -------
@@ -91,6 +98,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         flags &= ~VISCOSITY_CLAMPED
     if flags:
         message += f'; outside the table: {describe_flags(flags)}'
+    if note:
+        message += f'; {note}'
     nan = math.nan
     values: list[tuple[str, float | int | str]] = [
         ('level', level),
@@ -135,6 +144,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     values.append(('baseline_window_std_nm', math.sqrt(fit.window_var_nm2)))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]
+    values += extra
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
 
 

@@ -24,16 +24,14 @@ skip is counted. The offline replay hands over many messages at once through `on
 
 Expected input torque = theoretical + friction (table) + J * filtered d(omega)/dt
 + drive loss (opposing the motion), by `model.input_torque_nm`. The derivative is that of
-the speed through two first-order low-pass stages (``speed_filter``), so noisy speed does
-not make it explode. The residual, measured minus expected, exists when a fresh measured
-torque does; it feeds the `WearMonitor`.
+the speed through two low-pass stages (``speed_filter``). The residual, measured minus
+expected, exists when a fresh measured torque does; the `WearMonitor` takes it aligned in
+time and in steady running only (``settled_residual``).
 
-Rejected and counted, never raised: non-finite values, values beyond physical
-plausibility, stamps equal to (duplicate) or older than (out of order) the input's last
-accepted stamp, header stamps more than ``max_stamp_lead_s`` ahead of the receive time,
-and messages without a usable sample (`inputs.Defect`). After ``stamp_resync_samples``
-out-of-order samples of one input in a row its clock is taken as restarted (counted), so
-no single bad stamp can stall the estimator for longer than that.
+Rejected and counted, never raised: non-finite or implausible values, duplicate or
+out-of-order stamps, header stamps more than ``max_stamp_lead_s`` ahead of the receive
+time, messages without a usable sample (`inputs.Defect`). After ``stamp_resync_samples``
+out-of-order samples of one input in a row its clock is taken as restarted (counted).
 """
 
 from __future__ import annotations
@@ -41,7 +39,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 import math
-from typing import Any
+from typing import Any, TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -79,6 +77,9 @@ from ..physics.pump_parameters import load_pump
 from ..table.exact_lookup import ExactTableLookup
 from ..table.friction_table import FrictionTable
 from ..table.table_files import cached_table, load_table
+
+if TYPE_CHECKING:
+    from .baseline_store import BaselineStore
 
 __all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
 
@@ -145,6 +146,7 @@ class TorqueEstimator:
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,
                                        config.monitor_settle_s, config.monitor_lookahead_s)
+        self.baseline: BaselineStore | None = None  # its status goes into the diagnostics
         # indexed by InputKind; the value is a float for every kind but JOINT_STATE's
         handlers = {InputKind.JOINT_STATE: self._on_joint_state,
                     InputKind.SHAFT_SPEED: self._on_speed,
@@ -177,6 +179,33 @@ class TorqueEstimator:
         """Forget the wear monitor's state, its baseline included (after a repair): re-learn."""
         self.monitor.reset()
         self._monitor_stamp_ns: int | None = None
+        # what the monitor learnt from since this reset, across restarts (`learnt`)
+        self._learnt_first_ns: int | None = None
+        self._learnt_last_ns: int | None = None  # before the restart (a baseline file)
+        self._learnt_offset = -self.counts['monitor_samples']
+
+    @property
+    def learnt(self) -> tuple[int, int | None, int | None]:
+        """Return samples learnt since the monitor's reset (restarts too), first, last [ns]."""
+        last = self._monitor_stamp_ns
+        return (self._learnt_offset + self.counts['monitor_samples'], self._learnt_first_ns,
+                self._learnt_last_ns if last is None else last)
+
+    def restore_monitor(self, state: dict[str, object], samples: int, first_ns: int | None,
+                        last_ns: int | None) -> None:
+        """
+        Restore the monitor's state and `learnt` as saved before a restart (a baseline file).
+
+        A state the monitor refuses raises its ValueError, the monitor reset, never half loaded.
+        """
+        self.reset_monitor()
+        try:
+            self.monitor.load_state_dict(state)
+        except ValueError:
+            self.reset_monitor()
+            raise
+        self._learnt_offset += samples
+        self._learnt_first_ns, self._learnt_last_ns = first_ns, last_ns
 
     # -- inputs ---------------------------------------------------------------------------
 
@@ -224,20 +253,8 @@ class TorqueEstimator:
 
         Parameters
         ----------
-        kinds : array_like of int
-            `InputKind` of each message.
-        stamps : array_like of int
-            Sample times [ns].
-        log_times : array_like of int
-            Receive times [ns] (``receive_ns``).
-        values : array_like of float
-            The value in SI (JointState: the speed), meaningful where ``has_value``.
-        torques : array_like of float
-            JointState only: the measured torque [N m], meaningful where ``has_torque``.
-        has_value, has_torque : array_like of bool
-            ``value`` / ``torque_nm`` is not None.
-        defects : array_like of int
-            `Defect` of each message; 0 for a sample.
+        kinds, stamps, log_times, values, torques, has_value, has_torque, defects : array_like
+            The messages, as ``chunk_path.estimate_chunk`` takes them.
 
         Returns
         -------
@@ -410,6 +427,8 @@ class TorqueEstimator:
         inertia, vp, other, theoretical, speed = payload
         sign = 1.0 if speed > 0.0 else -1.0
         last = self._monitor_stamp_ns
+        if last is None and self._learnt_first_ns is None:
+            self._learnt_first_ns = stamp_ns
         # a clock restart (stamp resync) steps back: a new run for the monitor
         gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
         self._monitor_stamp_ns = stamp_ns
@@ -435,8 +454,10 @@ class TorqueEstimator:
 
         """
         axis = self.table.viscosity_axis_m2_s
+        extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
-                        self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])))
+                        self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
+                        extra, note)
 
 
 def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:

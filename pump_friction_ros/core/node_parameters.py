@@ -223,6 +223,14 @@ class EstimatorConfig:
     hardware_id: str = _param('eha_pump', 'hardware_id of the diagnostic status.')
     reliable_inputs: bool = _param(False, 'Subscribe with reliable QoS instead of the '
                                    'sensor-data profile (best effort).')
+    baseline_file: str = _param(
+        '', "File of the wear monitor's learnt healthy baseline, loaded at start, saved "
+        'periodically, on ~/reset_monitor and at shutdown (relative: to the current '
+        'directory); empty: $ROS_HOME/pump_friction_ros/baselines/<namespace.node name>.yaml, '
+        'ROS_HOME defaulting to ~/.ros.')
+    baseline_save_period_s: float = _param(
+        60.0, 'Period of saving the baseline file while the monitor learns [s].', 1.0,
+        86400.0)
 
     def __post_init__(self) -> None:
         for f in fields(self):  # choices given as strings (tests, YAML) become their enum

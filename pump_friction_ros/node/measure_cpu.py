@@ -42,6 +42,7 @@ import signal
 import statistics
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from typing import Any
@@ -330,8 +331,11 @@ def _role_estimator(args: argparse.Namespace) -> None:
     from ..core.inputs import InputKind
     from ..physics.pump_parameters import config_dir
 
+    # its own baseline file: the benchmark's synthetic running must not touch a real one
+    state = tempfile.TemporaryDirectory(prefix='measure_cpu_')
     ros_args = ['--ros-args', '--params-file', str(config_dir() / 'torque_estimator.yaml'),
-                '-p', f'reliable_inputs:={"true" if args.reliable else "false"}']
+                '-p', f'reliable_inputs:={"true" if args.reliable else "false"}',
+                '-p', f'baseline_file:={state.name}/baseline.yaml']
     for item in args.estimator_param:
         ros_args += ['-p', item]
     rclpy.init(args=ros_args)

@@ -26,6 +26,7 @@ from __future__ import annotations
 from collections.abc import Callable
 import math
 import sys
+import time
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -51,6 +52,7 @@ from std_msgs.msg import Float64, Header
 from std_srvs.srv import Trigger
 
 from .stop_signals import StopSignals
+from ..core.baseline_store import baseline_path, BaselineStore
 from ..core.estimate_record import Estimate
 from ..core.estimator import estimator_from_config
 from ..core.inputs import (
@@ -152,6 +154,10 @@ class TorqueEstimatorNode(Node):
         self.config = config_from_mapping(values, 'parameter ',
                                           default_origin='a node parameter')
         self.core = estimator_from_config(self.config)
+        name = self.get_fully_qualified_name()
+        self.baseline = BaselineStore(baseline_path(self.config.baseline_file, name), self.core,
+                                      f'node {name}')
+        self.core.baseline = self.baseline  # its status goes into /diagnostics
         self._types = MessageTypes(Float64, Time, Header, KeyValue, DiagnosticStatus,
                                    DiagnosticArray)
         # messages received per input, indexed by `InputKind` (tests, the CPU benchmark)
@@ -192,7 +198,9 @@ class TorqueEstimatorNode(Node):
                 self.get_logger().info(f'the middleware reports no incompatible QoS on '
                                        f'{inp.topic}: a best-effort publisher goes unnoticed')
         self.create_service(Trigger, '~/reset_monitor', self._on_reset)
+        # the baseline is saved from the diagnostics timer: no entity more in the wait set
         self.create_timer(1.0 / cfg.diagnostics_rate_hz, self._on_diagnostics_timer)
+        self._next_save_s = time.monotonic() + cfg.baseline_save_period_s
         self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
         axis_cst = self.core.table.viscosity_axis_m2_s[[0, -1]] * 1e6
         self.get_logger().info(
@@ -202,6 +210,8 @@ class TorqueEstimatorNode(Node):
             f'{cfg.pressure_source}, viscosity {cfg.viscosity_source}')
         if self.core.table_coverage:
             self.get_logger().warning(self.core.table_coverage)
+        severity, line = self.baseline.load()
+        getattr(self.get_logger(), severity)(line)
 
     # -- conversions at the edge ----------------------------------------------------------
 
@@ -257,12 +267,22 @@ class TorqueEstimatorNode(Node):
         now = self._now_ns()
         self._diag_pub.publish(diagnostic_array(self._types, self.core.diagnostics(now), now,
                                                 self._status_name, self.config.hardware_id))
+        if time.monotonic() >= self._next_save_s:
+            self._next_save_s = time.monotonic() + self.config.baseline_save_period_s
+            self.save_baseline()
+
+    def save_baseline(self) -> None:
+        """Save the baseline file if the monitor learnt anything new; a failure warns once."""
+        warning = self.baseline.save()
+        if warning:
+            self.get_logger().warning(warning)
 
     def _on_reset(self, request: Trigger.Request, response: Trigger.Response
                   ) -> Trigger.Response:
-        self.core.reset_monitor()
-        response.success = True
-        response.message = 'wear monitor reset: the healthy baseline is learnt afresh, no alarm'
+        # after a repair: forget the learnt baseline, keep the old file as .bak, re-learn
+        response.success, response.message = self.baseline.reset()
+        (self.get_logger().info if response.success else self.get_logger().warning)(
+            response.message)
         return response
 
 
@@ -311,11 +331,24 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
     finally:
         why = stop.received[0] if stop.received else 'context shut down'
         logger = node.get_logger().name if node is not None else NODE_NAME
+        unsaved = _save_baseline_at_exit(node)
         executor.shutdown()
         if node is not None:
             node.destroy_node()
-        # after destroy_node: the line goes to the console, not to /rosout (whose
+        # after destroy_node: the lines go to the console, not to /rosout (whose
         # publisher died with the context)
+        if unsaved:
+            rclpy.logging.get_logger(logger).warning(unsaved)
         rclpy.logging.get_logger(logger).info(f'stopping on {why}')
         rclpy.try_shutdown()
     return 0
+
+
+def _save_baseline_at_exit(node: TorqueEstimatorNode | None) -> str:
+    """Save what the monitor learnt since the last save; return a warning, never raise."""
+    if node is None:
+        return ''
+    try:
+        return node.baseline.save()
+    except Exception as exc:  # the clean-up must run to its end
+        return f'baseline file not saved at shutdown: {type(exc).__name__}: {exc}'
