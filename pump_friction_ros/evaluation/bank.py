@@ -47,9 +47,10 @@ from ..core.estimator import TorqueEstimator
 from ..core.inputs import InputKind
 from ..core.monitor import OK
 from ..core.node_parameters import EstimatorConfig, load_estimator_config
+from ..core.oil_range import table_spec_for
 from ..paths import config_dir
 from ..physics.pump_parameters import load_pump, PumpParams
-from ..table.friction_table import FrictionTable
+from ..table.friction_table import FrictionTable, TableSpec
 from ..table.table_files import cached_table
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'build_scenarios',
@@ -151,6 +152,17 @@ class BankResult:
 def _pump_and_table() -> tuple[PumpParams, FrictionTable]:
     params = load_pump(None)
     return params, cached_table(params)
+
+
+@lru_cache(maxsize=8)
+def _node_table(spec: TableSpec) -> FrictionTable:
+    """Return the table the node builds for its oil (`oil_range.table_spec_for`), cached."""
+    return cached_table(_pump_and_table()[0], spec=spec)
+
+
+def _node_spec(scenario: Scenario) -> TableSpec:
+    params = _pump_and_table()[0]
+    return table_spec_for(scenario.estimator_config(), params.oil.viscosity_m2_s)
 
 
 def base_config() -> EstimatorConfig:
@@ -263,6 +275,8 @@ def prepare_true_tables(scenarios: list[Scenario]) -> int:
             variants.add((draw_eha(scenario).variant, motion.mismatch))
     for variant, mismatch in variants:
         true_table(variant, mismatch)
+    for spec in {_node_spec(scenario) for scenario in scenarios}:  # the node's, per oil
+        _node_table(spec)
     return len(variants)
 
 
@@ -332,8 +346,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
     """
     params, table = _pump_and_table()
     sim = simulate_scenario(scenario, table)
-    core = TorqueEstimator(scenario.estimator_config(), table, params.oil.viscosity_m2_s,
-                           params.name)
+    core = TorqueEstimator(scenario.estimator_config(), _node_table(_node_spec(scenario)),
+                           params.oil.viscosity_m2_s, params.name)
     onset_ns = scenario.onset_s * 1e9
     before, first, monitored = _feed(core, sim, onset_ns)
     period_s = float(sim.t_s[1] - sim.t_s[0])
