@@ -59,7 +59,7 @@ import numpy as np
 
 from .baseline import Baseline
 
-__all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict']
+__all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
 CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torque_offset',
           'drive_loss')
@@ -99,34 +99,38 @@ class AttributionSettings:
     scale_systematic_std: float
 
 
-def signatures(baseline: Baseline, h: np.ndarray, drive_loss_nm: float) -> np.ndarray:
+def signature_matrix(baseline: Baseline, drive_loss_nm: float) -> np.ndarray:
     """
-    Return the signature of each cause over one window (`CAUSES` order).
+    Return M such that the causes' signatures over a window are s = M h (`CAUSES` order).
+
+    h is the window's regressor vector (``baseline.baseline_regressors``: T_vp, T_o, 1, s,
+    T_th s); every signature is linear in it.
 
     Parameters
     ----------
     baseline : Baseline
-        The healthy signature.
-    h : ndarray
-        The window's regressors (``baseline.baseline_regressors``).
+        The healthy signature (its friction levels and drive loss).
     drive_loss_nm : float
         The configured drive loss [N m].
 
     Returns
     -------
-    ndarray
-        s_j [N m per unit of delta_j].
+    ndarray, shape (6, 5)
+        M [N m per unit of delta_j, per unit of h].
 
     """
     b = baseline.coefficients
-    vp = (1.0 + b[0]) * h[0]
-    other = (1.0 + b[1]) * h[1]
-    static = h[4] + vp + other + drive_loss_nm + b[2]
-    return np.array([vp, other, static, -h[4], h[3], 1.0])
+    vp, other = 1.0 + b[0], 1.0 + b[1]
+    return np.array([[vp, 0.0, 0.0, 0.0, 0.0],  # valve plate, healthy level
+                     [0.0, other, 0.0, 0.0, 0.0],  # other friction, healthy level
+                     [vp, other, drive_loss_nm + b[2], 0.0, 1.0],  # the static torque
+                     [0.0, 0.0, 0.0, 0.0, -1.0],  # pressure read too high
+                     [0.0, 0.0, 0.0, 1.0, 0.0],  # torque offset
+                     [0.0, 0.0, 1.0, 0.0, 0.0]])  # drive loss
 
 
-class _SideStats:
-    """Weighted sums over the windows since one side's CUSUM left zero."""
+class _ChangeStats:
+    """Weighted sums over the windows since the monitor's CUSUMs left zero."""
 
     def __init__(self) -> None:
         self.clear()
@@ -153,7 +157,7 @@ class _SideStats:
 
 class FaultIsolation:
     """
-    GLR of the single causes on the windows since the change, per side of the model.
+    GLR of the single causes on the windows since the change.
 
     Parameters
     ----------
@@ -169,51 +173,40 @@ class FaultIsolation:
     def __init__(self, settings: AttributionSettings, viscosity_assumed: bool) -> None:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
-        self.sides = {1.0: _SideStats(), -1.0: _SideStats()}
+        self.stats = _ChangeStats()
 
     def reset(self) -> None:
         """Forget every window."""
-        for stats in self.sides.values():
-            stats.clear()
+        self.stats.clear()
 
     def add(self, s: np.ndarray, d_nm: float, weight: float, duration_s: float,
-            positive: bool, negative: bool, started_pos: bool, started_neg: bool) -> None:
+            changing: bool) -> None:
         """
-        Add one window to the side(s) whose CUSUM is above zero.
+        Add one window, or forget the windows when no change is under way.
 
         Parameters
         ----------
         s : ndarray
-            Signatures of the window (`signatures`).
+            Signatures of the window (``signature_matrix @ h``).
         d_nm : float
             Its residual minus the baseline's prediction [N m].
         weight : float
             Its inverse noise variance [1/N m^2].
         duration_s : float
             Its monitored running [s] (the memory's clock).
-        positive, negative : bool
-            S+ / S- is above zero after this window.
-        started_pos, started_neg : bool
-            S+ / S- was zero before this window (a new change starts with it).
+        changing : bool
+            A CUSUM of the monitor is above zero after this window: the window belongs to
+            the change; otherwise the sums start afresh.
 
         """
-        keep = math.exp(-duration_s / self.settings.isolation_memory_s)
-        for side, above, started in ((1.0, positive, started_pos),
-                                     (-1.0, negative, started_neg)):
-            stats = self.sides[side]
-            if not above or started:
-                stats.clear()
-            if above:
-                stats.add(s, d_nm, weight, keep)
+        if not changing:
+            self.stats.clear()
+            return
+        self.stats.add(s, d_nm, weight, math.exp(-duration_s / self.settings.isolation_memory_s))
 
-    def evidence(self, side: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
-        Return the GLR statistic, the change and its std of each cause on one side.
-
-        Parameters
-        ----------
-        side : float
-            +1: torque above the baseline, -1: below.
+        Return the GLR statistic, the change and its std of each cause since the change.
 
         Returns
         -------
@@ -223,7 +216,7 @@ class FaultIsolation:
             fit of the best single cause, so that model error does not pass for evidence.
 
         """
-        stats = self.sides[side]
+        stats = self.stats
         gjj = np.diag(stats.g)
         ok = gjj > 0.0
         safe = np.where(ok, gjj, 1.0)
@@ -235,14 +228,9 @@ class FaultIsolation:
         std = np.where(ok, np.sqrt(inflation / safe), math.nan)
         return t / inflation, delta, std
 
-    def verdict(self, side: float) -> tuple[str, str, int]:
+    def verdict(self) -> tuple[str, str, int]:
         """
-        Return what explains the change on one side, in words, and the cause named.
-
-        Parameters
-        ----------
-        side : float
-            +1: torque above the baseline, -1: below.
+        Return what explains the change, in words, and the cause named.
 
         Returns
         -------
@@ -251,10 +239,10 @@ class FaultIsolation:
             cause named or -1).
 
         """
-        stats = self.sides[side]
+        stats = self.stats
         if not stats.windows:
             return Verdict.NONE, 'no change from the baseline', -1
-        t, delta, _ = self.evidence(side)
+        t, delta, _ = self.evidence()
         z2 = self.settings.attribution_z ** 2
         order = [int(i) for i in np.argsort(-np.nan_to_num(t, nan=-1.0))]
         j, k = order[0], order[1]
@@ -287,7 +275,7 @@ class FaultIsolation:
                 ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else '')
         return _CLASS[j], name, j
 
-    def scales(self, side: float, baseline: Baseline) -> tuple[float, float, float, float]:
+    def scales(self, baseline: Baseline) -> tuple[float, float, float, float]:
         """
         Return the valve-plate and other friction scales relative to healthy, with stds.
 
@@ -297,8 +285,6 @@ class FaultIsolation:
 
         Parameters
         ----------
-        side : float
-            +1: torque above the baseline, -1: below.
         baseline : Baseline
             The healthy signature (the uncertainty of its friction levels).
 
@@ -309,11 +295,10 @@ class FaultIsolation:
 
         """
         floor = self.settings.scale_systematic_std
-        stats = self.sides[side]
-        if not stats.windows:
+        if not self.stats.windows:
             return 1.0, floor, 1.0, floor
-        verdict, _, named = self.verdict(side)
-        t, delta, std = self.evidence(side)
+        verdict, _, named = self.verdict()
+        t, delta, std = self.evidence()
         level_std = baseline.std()
         coef = baseline.coefficients
         out: list[float] = []
@@ -328,10 +313,10 @@ class FaultIsolation:
         return out[0], out[1], out[2], out[3]
 
     def state(self) -> dict[str, object]:
-        """Return the sums of both sides as plain values."""
-        return {str(int(side)): {'g': s.g.tolist(), 'b': s.b.tolist(), 'c': s.c,
-                                 'count': s.count, 'windows': s.windows}
-                for side, s in self.sides.items()}
+        """Return the sums as plain values."""
+        st = self.stats
+        return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
+                'windows': st.windows}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -348,13 +333,12 @@ class FaultIsolation:
             Missing or malformed sums.
 
         """
-        for side, stats in self.sides.items():
-            entry = state[str(int(side))]
-            g = np.asarray(entry['g'], dtype=float)  # type: ignore[index]
-            b = np.asarray(entry['b'], dtype=float)  # type: ignore[index]
-            if g.shape != (_N, _N) or b.shape != (_N,) or not np.all(np.isfinite(g)):
-                raise ValueError('isolation sums of the wrong shape or not finite')
-            stats.g, stats.b = g, b
-            stats.c = float(entry['c'])  # type: ignore[index]
-            stats.count = float(entry['count'])  # type: ignore[index]
-            stats.windows = int(entry['windows'])  # type: ignore[index]
+        g = np.asarray(state['g'], dtype=float)
+        b = np.asarray(state['b'], dtype=float)
+        if g.shape != (_N, _N) or b.shape != (_N,) or not np.all(np.isfinite(g)):
+            raise ValueError('isolation sums of the wrong shape or not finite')
+        st = self.stats
+        st.g, st.b = g, b
+        st.c = float(state['c'])  # type: ignore[arg-type]
+        st.count = float(state['count'])  # type: ignore[arg-type]
+        st.windows = int(state['windows'])  # type: ignore[call-overload]

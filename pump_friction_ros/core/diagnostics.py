@@ -169,9 +169,10 @@ def level_message(level: int, mon: WearMonitor) -> str:
         if mon.learning:
             return mon.baseline_status()
         return 'torque as the healthy baseline'
-    side = 'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below'
-    verdict = mon.verdict(1.0 if side == 'above' else -1.0)[1]
-    return f'{LEVEL_NAMES[level]}: torque {side} the healthy baseline: {verdict}'
+    verdict, words = mon.verdict(1.0)
+    side = 'differs from' if verdict == 'not_friction' else (
+        'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below')
+    return f'{LEVEL_NAMES[level]}: torque {side} the healthy baseline: {words}'
 
 
 def format_value(value: float | int | str) -> str:

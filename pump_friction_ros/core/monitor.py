@@ -28,10 +28,13 @@ is dropped), and each window mean is one measurement:
    two halves agree (``_learn``); while the oil warms up they do not, and learning goes
    on. No alarm is raised meanwhile (the diagnostics say that the baseline is being
    learnt); the published scales are the fit's, against the model.
-2. **Detection.** The change d = e - e_hat from the baseline's prediction feeds a
-   two-sided CUSUM weighted by time, so that the thresholds do not depend on the rates:
-   S+ = max(0, S+ + (d - k) T) and S- = max(0, S- + (-d - k) T), in N m s (T the window's
-   running). WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
+2. **Detection.** The change d = e - e_hat from the baseline's prediction, projected on
+   each cause's signature (z_j = s_j d / rms(s_j), in N m at a typical operating point),
+   feeds a two-sided CUSUM per cause weighted by time, so that the thresholds do not depend
+   on the rates: S+ = max(0, S+ + (z - k) T) and S- = max(0, S- + (-z - k) T), in N m s (T
+   the window's running); S+ and S- reported are the largest of the causes'. (One sum on d
+   would miss a torque-gain change, which raises d when pumping and lowers it when
+   motoring.) WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
    ``cusum_error_nm_s``; a level clears only below ``cusum_clear_ratio`` times its
    threshold (hysteresis). The sums are capped at `CUSUM_CAP_RATIO` times the ERROR
    threshold. An EWMA of d gives the diagnostics a smoothed view.
@@ -50,7 +53,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .attribution import AttributionSettings, FaultIsolation, signatures, Verdict
+from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
 from .baseline import Baseline, baseline_regressors, BaselineLearner
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
@@ -158,8 +161,11 @@ class WearMonitor:
     def _reset_detection(self) -> None:
         self.ewma_nm = 0.0
         self._var = 0.0
+        self._pos = np.zeros(len(CAUSES))  # a CUSUM per cause, each side
+        self._neg = np.zeros(len(CAUSES))
         self.cusum_pos_nm_s = 0.0
         self.cusum_neg_nm_s = 0.0
+        self._set_signatures()
         self.level = OK
         self.alarm_onset_s = math.nan
         self._publish_fit()
@@ -206,7 +212,7 @@ class WearMonitor:
         """
         if self.baseline is None:
             return Verdict.NONE, self.baseline_status()
-        verdict, words, _ = self.isolation.verdict(side)
+        verdict, words, _ = self.isolation.verdict()
         return verdict, words
 
     # -- samples --------------------------------------------------------------------------
@@ -341,13 +347,18 @@ class WearMonitor:
         dev = d - self.ewma_nm
         self.ewma_nm += a * dev
         self._var += a * (dev * dev - self._var)
+        # a CUSUM per cause on d projected on its signature, in N m at a typical point of
+        # commissioning: a change of any cause's shape drives its own sum (a torque gain
+        # moves d up when pumping and down when motoring, which one sum on d misses)
+        sig = self._m @ h
+        z = sig * d / self._norm
         k, cap = self._k, self._cap
-        was_pos, was_neg = self.cusum_pos_nm_s == 0.0, self.cusum_neg_nm_s == 0.0
-        self.cusum_pos_nm_s = min(max(self.cusum_pos_nm_s + (d - k) * duration, 0.0), cap)
-        self.cusum_neg_nm_s = min(max(self.cusum_neg_nm_s + (-d - k) * duration, 0.0), cap)
-        self.isolation.add(signatures(baseline, h, self._drive_loss), d, 1.0 / var, duration,
-                           self.cusum_pos_nm_s > 0.0, self.cusum_neg_nm_s > 0.0, was_pos,
-                           was_neg)
+        self._pos = np.clip(self._pos + (z - k) * duration, 0.0, cap)
+        self._neg = np.clip(self._neg + (-z - k) * duration, 0.0, cap)
+        self.cusum_pos_nm_s = float(self._pos.max())
+        self.cusum_neg_nm_s = float(self._neg.max())
+        self.isolation.add(sig, d, 1.0 / var, duration,
+                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         if level != self.level:
             if self.level == OK:
@@ -355,9 +366,8 @@ class WearMonitor:
             elif level == OK:
                 self.alarm_onset_s = math.nan
             self.level = level
-        side = 1.0 if self.cusum_pos_nm_s >= self.cusum_neg_nm_s else -1.0
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
-            self.isolation.scales(side, baseline)
+            self.isolation.scales(baseline)
 
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
         """
@@ -394,6 +404,16 @@ class WearMonitor:
         self.restarts += 1
         self.fit = self.learner.fit()
         self._publish_fit()
+
+    def _set_signatures(self) -> None:
+        """Make the causes' signature matrix and its RMS per cause over commissioning."""
+        if self.baseline is None:
+            self._m = np.zeros((len(CAUSES), 5))
+            self._norm = np.ones(len(CAUSES))
+            return
+        self._m = signature_matrix(self.baseline, self._drive_loss)
+        second = self._m @ self.learner.a @ self._m.T / max(self.learner.weight, 1e-300)
+        self._norm = np.sqrt(np.maximum(np.diag(second), 1e-12))
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, 1 once learnt."""
@@ -436,7 +456,7 @@ class WearMonitor:
                 'restarts': self.restarts, 'drift_nm': self.drift_nm,
                 'baseline_complete': self.baseline is not None,
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
-                'cusum_pos_nm_s': self.cusum_pos_nm_s, 'cusum_neg_nm_s': self.cusum_neg_nm_s,
+                'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
                 'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
                 'isolation': self.isolation.state()}
 
@@ -478,12 +498,18 @@ class WearMonitor:
         self.windows = int(state['windows'])  # type: ignore[call-overload]
         self.fit = self.learner.fit()
         self.baseline = self.fit if state['baseline_complete'] else None
-        floats = [float(state[key]) for key in (  # type: ignore[arg-type]
-            'ewma_nm', 'ewma_var_nm2', 'cusum_pos_nm_s', 'cusum_neg_nm_s', 'alarm_onset_s')]
-        if not all(math.isfinite(x) for x in floats[:4]):
-            raise ValueError('monitor sums not finite')
-        self.ewma_nm, self._var, self.cusum_pos_nm_s, self.cusum_neg_nm_s, \
-            self.alarm_onset_s = floats
+        ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
+            'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
+        pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)
+        neg = np.asarray(state['cusum_neg_nm_s'], dtype=float)
+        if pos.shape != (len(CAUSES),) or neg.shape != pos.shape or not (
+                np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
+                and math.isfinite(ewma) and math.isfinite(var)):
+            raise ValueError('monitor sums of the wrong shape or not finite')
+        self._set_signatures()
+        self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
+        self._pos, self._neg = pos, neg
+        self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
         level = int(state['level'])  # type: ignore[call-overload]
         if level not in (OK, WARN, ERROR):
             raise ValueError(f'monitor level {level}')
@@ -492,6 +518,5 @@ class WearMonitor:
         if self.baseline is None:
             self._publish_fit()
         else:
-            side = 1.0 if self.cusum_pos_nm_s >= self.cusum_neg_nm_s else -1.0
             self.theta_vp, self.valve_plate_scale_std, self.theta_rest, \
-                self.rest_scale_std = self.isolation.scales(side, self.baseline)
+                self.rest_scale_std = self.isolation.scales(self.baseline)
