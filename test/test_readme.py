@@ -155,11 +155,13 @@ def test_worked_example_replay_figures(worked_example):
     learnt = (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
         (np.abs(accel) <= config.monitor_max_accel_rad_s2)
     mean, rest, vp = _figures(r'residual the monitor learns from averages\s+(-[\d.]+) N m.*?'
-                              r'other components\s+\(scale ([\d.]+)\) rather than on the '
-                              r'valve plate \(([\d.]+)\)', CALIBRATION)
+                              r'other components\s+at ([\d.]+) of the model and the valve '
+                              r'plate at ([\d.]+)', CALIBRATION)
     assert np.mean(residual[learnt] * np.sign(speed[learnt])) == pytest.approx(mean, abs=5e-4)
-    assert core.monitor.theta_rest == pytest.approx(rest, abs=5e-3)
-    assert core.monitor.theta_vp == pytest.approx(vp, abs=5e-3)
+    baseline = core.monitor.baseline
+    assert baseline is not None  # learnt from the nominal bag
+    assert 1.0 + baseline.coefficients[1] == pytest.approx(rest, abs=5e-3)
+    assert 1.0 + baseline.coefficients[0] == pytest.approx(vp, abs=5e-3)
     assert not summary.warn_intervals and not summary.error_intervals  # "no alarm"
 
 

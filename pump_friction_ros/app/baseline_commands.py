@@ -110,6 +110,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
     origin = 'pump_friction learn-baseline ' + ' '.join(str(b.resolve()) for b in bags)
     reference: tuple[Path, dict[str, Any]] | None = None
     notes: list[str] = []
+    status = ''  # the baseline's after the last bag
     for bag in bags:
         cfg = bag_config(bag, args, config, notes)
         core = estimator_from_config(cfg)
@@ -130,6 +131,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
                  if summary.warn_intervals or summary.error_intervals else '')
         print(f'{bag}: {summary.duration_s:.1f} s, {summary.counts.get("monitor_samples", 0)} '
               f'monitored samples{alarm}')
+        status = core.monitor.baseline_status()
     for note in notes:
         print(note)
     learnt = document['learnt'] if document else {'samples': 0}
@@ -138,8 +140,8 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
                             'monitor_min_speed_rad_s, with a measured torque)')
     write_baseline(out, document)
     first, last = learnt['first_stamp_ns'] * 1e-9, learnt['last_stamp_ns'] * 1e-9
-    print(f'{out}: healthy baseline learnt from {learnt["samples"]} monitored samples, '
-          f'stamps {first:.3f} to {last:.3f} s, pump {document["provenance"]["pump"]["name"]}')
+    print(f'{out}: {learnt["samples"]} monitored samples, stamps {first:.3f} to {last:.3f} s, '
+          f'pump {document["provenance"]["pump"]["name"]}: {status}')
     return 0
 
 

@@ -174,9 +174,10 @@ class EstimatorConfig:
         '(the inertia torque, 0.2 N m there at 2e-4 kg m^2, must be known well).', 0.0, _INF)
     ewma_time_constant_s: float = _param(2.0, "Time constant of the residual's EWMA [s].",
                                          1e-3, 1e5)
-    cusum_drift_nm: float = _param(0.05, 'CUSUM allowance k: friction residual tolerated '
-                                   'without accumulating [N m].', 0.0, 100.0)
-    cusum_warn_nm_s: float = _param(1.5, 'CUSUM level (integral of residual beyond k) for '
+    cusum_drift_nm: float = _param(
+        0.05, 'CUSUM allowance k: change from the healthy baseline (per cause, at a typical '
+        'operating point) tolerated without accumulating [N m].', 0.0, 100.0)
+    cusum_warn_nm_s: float = _param(1.0, 'CUSUM level (integral of the change beyond k) for '
                                     'WARN [N m s].', 1e-6, 1e6)
     cusum_error_nm_s: float = _param(5.0, 'CUSUM level for ERROR [N m s].', 1e-6, 1e6)
     cusum_clear_ratio: float = _param(0.5, 'A level clears when the CUSUM falls below this '
