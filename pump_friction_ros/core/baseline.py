@@ -45,7 +45,8 @@ import math
 
 import numpy as np
 
-__all__ = ['BASELINE_TERMS', 'Baseline', 'BaselineLearner', 'baseline_regressors']
+__all__ = ['BASELINE_TERMS', 'Baseline', 'BaselineLearner', 'Commissioning',
+           'baseline_regressors']
 
 BASELINE_TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
                   'torque_gain')
@@ -215,3 +216,121 @@ class BaselineLearner:
             raise ValueError('baseline sums negative or not finite')
         self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
         self.windows = int(state['windows'])  # type: ignore[call-overload]
+
+
+class Commissioning:
+    """
+    Learn the baseline until ``learn_s`` of monitored running agree with themselves.
+
+    The windows fill two halves of ``learn_s / 2`` each. When both are full, the fits of
+    each half are compared over the operating points of the second: where their
+    predictions differ by more than ``tolerance_nm`` (RMS), the pump was still changing (oil
+    warming up, running in) and the first half is dropped: learning goes on with the
+    second. Otherwise the baseline is the fit of both.
+
+    Parameters
+    ----------
+    prior_std : tuple of float
+        Prior standard deviation of each coefficient (`BASELINE_TERMS` order).
+    learn_s : float
+        Monitored running to learn from [s].
+    tolerance_nm : float
+        Largest RMS difference of the two halves' predictions of a stationary pump [N m].
+
+    """
+
+    def __init__(self, prior_std: tuple[float, ...], learn_s: float,
+                 tolerance_nm: float) -> None:
+        self.learn_s = learn_s
+        self.tolerance_nm = tolerance_nm
+        self.learner = BaselineLearner(prior_std)
+        self.older = BaselineLearner(prior_std)
+        self.recent = BaselineLearner(prior_std)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every window: learn afresh."""
+        for learner in (self.learner, self.older, self.recent):
+            learner.reset()
+        self.restarts = 0
+        """Times the older half was dropped: the pump was still changing."""
+        self.drift_nm = math.nan
+        """RMS difference of the two halves' predictions at the last check [N m]."""
+        self.fit = self.learner.fit()
+
+    def add(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> bool:
+        """
+        Add a window; return whether the baseline is now complete (`fit` is it).
+
+        Parameters
+        ----------
+        h : ndarray
+            The window's regressors.
+        e_nm : float
+            Its mean residual [N m].
+        weight : float
+            Its length over the nominal window length [-].
+        duration_s : float
+            Its monitored running [s].
+
+        Returns
+        -------
+        bool
+            True once ``learn_s`` of stationary running are learnt.
+
+        """
+        half = 0.5 * self.learn_s
+        self.recent.add(h, e_nm, weight, duration_s)
+        self.learner.add(h, e_nm, weight, duration_s)
+        self.fit = self.learner.fit()
+        if self.recent.learnt_s < half:
+            return False
+        if self.learner.learnt_s - self.recent.learnt_s < half:
+            self.older.load(self.recent.state())  # the first half is full
+            self.recent.reset()
+            return False
+        change = self.older.fit().coefficients - self.recent.fit().coefficients
+        moments = self.recent.a / max(self.recent.weight, 1e-300)
+        self.drift_nm = math.sqrt(max(float(change @ moments @ change), 0.0))
+        if self.drift_nm <= self.tolerance_nm:
+            return True
+        self.learner.load(self.recent.state())  # still changing: keep the second half
+        self.older.load(self.recent.state())
+        self.recent.reset()
+        self.restarts += 1
+        self.fit = self.learner.fit()
+        return False
+
+    def status(self) -> str:
+        """Return the learning's progress in words."""
+        still = f' (still changing: restarted {self.restarts} times, last drift ' \
+            f'{self.drift_nm:.3f} N m)' if self.restarts else ''
+        return (f'learning the healthy baseline: {self.learner.learnt_s:.0f} of '
+                f'{self.learn_s:.0f} s of monitored running{still}')
+
+    def state(self) -> dict[str, object]:
+        """Return the sums as plain values."""
+        return {'learner': self.learner.state(), 'older': self.older.state(),
+                'recent': self.recent.state(), 'restarts': self.restarts,
+                'drift_nm': self.drift_nm}
+
+    def load(self, state: dict[str, object]) -> None:
+        """
+        Restore `state`'s sums.
+
+        Parameters
+        ----------
+        state : dict
+            A `state` result.
+
+        Raises
+        ------
+        ValueError
+            Missing or malformed sums.
+
+        """
+        for name in ('learner', 'older', 'recent'):
+            getattr(self, name).load(state[name])
+        self.restarts = int(state['restarts'])  # type: ignore[call-overload]
+        self.drift_nm = float(state['drift_nm'])  # type: ignore[arg-type]
+        self.fit = self.learner.fit()

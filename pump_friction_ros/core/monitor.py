@@ -54,7 +54,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
-from .baseline import Baseline, baseline_regressors, BaselineLearner
+from .baseline import Baseline, baseline_regressors, BaselineLearner, Commissioning
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
@@ -128,14 +128,12 @@ class WearMonitor:
         self._clear = config.cusum_clear_ratio
         self._cap = CUSUM_CAP_RATIO * config.cusum_error_nm_s
         self._window_s = attribution.attribution_window_s
-        self._learn_s = config.baseline_learn_s
         self._drive_loss = drive_loss_nm
         self._floor = attribution.scale_systematic_std
         prior = ((attribution.scale_prior_std,) * 2 + (attribution.offset_prior_std_nm,) * 2
                  + (attribution.torque_gain_prior_std,))
-        self.learner = BaselineLearner(prior)
-        self.older = BaselineLearner(prior)  # the halves of the stationarity check
-        self.recent = BaselineLearner(prior)
+        self.commissioning = Commissioning(prior, config.baseline_learn_s,
+                                           0.5 * config.cusum_drift_nm)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self.reset()
 
@@ -145,15 +143,8 @@ class WearMonitor:
         """Forget everything, the baseline included (after a repair): learn afresh."""
         self.samples = 0
         self.windows = 0
-        self.learner.reset()
-        self.older.reset()
-        self.recent.reset()
-        self.restarts = 0
-        """Times the commissioning dropped its older half: the pump was still changing."""
-        self.drift_nm = math.nan
-        """RMS difference of the two halves' predictions at the last check [N m]."""
+        self.commissioning.reset()
         self.baseline: Baseline | None = None
-        self.fit: Baseline = self.learner.fit()
         self.isolation.reset()
         self._reset_detection()
         self._open(0.0)
@@ -189,10 +180,7 @@ class WearMonitor:
     def baseline_status(self) -> str:
         """Return the baseline's state in words (for /diagnostics)."""
         if self.baseline is None:
-            still = f' (still changing: restarted {self.restarts} times, last drift ' \
-                f'{self.drift_nm:.3f} N m)' if self.restarts else ''
-            return (f'learning the healthy baseline: {self.learner.learnt_s:.0f} of '
-                    f'{self._learn_s:.0f} s of monitored running{still}; no alarm until then')
+            return f'{self.commissioning.status()}; no alarm until then'
         return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
 
     def verdict(self, side: float) -> tuple[str, str]:
@@ -369,41 +357,23 @@ class WearMonitor:
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline)
 
-    def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
-        """
-        Add a commissioning window; complete the baseline once it is learnt and stationary.
+    @property
+    def learner(self) -> BaselineLearner:
+        """The commissioning's sums (all of its stationary windows)."""
+        return self.commissioning.learner
 
-        The windows fill two halves of ``baseline_learn_s / 2`` each. When both are full,
-        the fits of each half are compared over the operating points of the second: where
-        their predictions differ by more than half the CUSUM allowance (RMS), the pump was
-        still changing (oil warming up, running in) and the first half is dropped: learning
-        goes on with the second. Otherwise the baseline is the fit of both.
-        """
-        self.recent.add(h, e_nm, weight, duration_s)
-        self.learner.add(h, e_nm, weight, duration_s)
-        self.fit = self.learner.fit()
-        if self.recent.learnt_s < 0.5 * self._learn_s:
-            self._publish_fit()
-            return
-        if self.learner.learnt_s - self.recent.learnt_s < 0.5 * self._learn_s:
-            self.older.load(self.recent.state())  # the first half is full
-            self.recent.reset()
-            self._publish_fit()
-            return
-        first, second = self.older.fit(), self.recent.fit()
-        change = first.coefficients - second.coefficients
-        moments = self.recent.a / max(self.recent.weight, 1e-300)
-        self.drift_nm = math.sqrt(max(float(change @ moments @ change), 0.0))
-        if self.drift_nm <= 0.5 * self._k:
+    @property
+    def fit(self) -> Baseline:
+        """The commissioning's fit so far (the baseline, once complete)."""
+        return self.commissioning.fit
+
+    def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
+        """Add a commissioning window; complete the baseline once learnt and stationary."""
+        if self.commissioning.add(h, e_nm, weight, duration_s):
             self.baseline = self.fit
             self._reset_detection()
-            return
-        self.learner.load(self.recent.state())  # still changing: keep the second half
-        self.older.load(self.recent.state())
-        self.recent.reset()
-        self.restarts += 1
-        self.fit = self.learner.fit()
-        self._publish_fit()
+        else:
+            self._publish_fit()
 
     def _set_signatures(self) -> None:
         """Make the causes' signature matrix and its RMS per cause over commissioning."""
@@ -451,9 +421,7 @@ class WearMonitor:
 
         """
         return {'version': self.STATE_VERSION, 'samples': self.samples,
-                'windows': self.windows, 'learner': self.learner.state(),
-                'older': self.older.state(), 'recent': self.recent.state(),
-                'restarts': self.restarts, 'drift_nm': self.drift_nm,
+                'windows': self.windows, 'commissioning': self.commissioning.state(),
                 'baseline_complete': self.baseline is not None,
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
                 'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
@@ -488,15 +456,10 @@ class WearMonitor:
             raise ValueError(f'malformed monitor state: {exc}') from None
 
     def _load(self, state: dict[str, object]) -> None:
-        self.learner.load(state['learner'])  # type: ignore[arg-type]
-        self.older.load(state['older'])  # type: ignore[arg-type]
-        self.recent.load(state['recent'])  # type: ignore[arg-type]
-        self.restarts = int(state['restarts'])  # type: ignore[call-overload]
-        self.drift_nm = float(state['drift_nm'])  # type: ignore[arg-type]
+        self.commissioning.load(state['commissioning'])  # type: ignore[arg-type]
         self.isolation.load(state['isolation'])  # type: ignore[arg-type]
         self.samples = int(state['samples'])  # type: ignore[call-overload]
         self.windows = int(state['windows'])  # type: ignore[call-overload]
-        self.fit = self.learner.fit()
         self.baseline = self.fit if state['baseline_complete'] else None
         ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))

@@ -1,0 +1,177 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The healthy baseline, the CUSUM on the change and the isolation, on windows of set truth."""
+
+import math
+
+import numpy as np
+from pump_friction_ros.core.attribution import AttributionSettings, Verdict
+from pump_friction_ros.core.baseline import baseline_regressors, BaselineLearner
+from pump_friction_ros.core.monitor import MonitorSettings, OK, WARN, WearMonitor
+from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
+import pytest
+
+DT = 1e-3
+WINDOW_SAMPLES = 250  # 0.25 s of monitored running: one window
+
+
+def monitor(viscosity_assumed=False, **overrides):
+    config = EstimatorConfig(**overrides)
+    return WearMonitor(settings_view(config, MonitorSettings),
+                       settings_view(config, AttributionSettings), 0.0, viscosity_assumed)
+
+
+def operating_points(rng, n):
+    """Window operating points of a load-driven cycle: friction, theoretical torque, sign."""
+    speed = rng.uniform(50.0, 900.0, n)
+    vp = 0.05 + 4e-4 * speed  # film shear grows with speed
+    other = 0.1 + rng.uniform(0.0, 0.4, n)  # grows with the load
+    theoretical = rng.uniform(-3.0, 3.0, n)  # pumping and motoring
+    sign = np.where(rng.random(n) < 0.5, 1.0, -1.0)
+    return vp, other, theoretical * sign, sign
+
+
+def feed(mon, t0, residual, vp, other, theoretical, sign):
+    """Feed one window of constant values; return the time after it."""
+    for i in range(WINDOW_SAMPLES):
+        mon.update(t0 + i * DT, DT, residual, vp, other, theoretical, sign)
+    return t0 + WINDOW_SAMPLES * DT
+
+
+def run(mon, rng, n, truth, change=None, noise=0.01, t0=0.0):
+    """Feed n windows; e = h . truth (+ the change's torque) + noise. Return the end time."""
+    vp, other, th_s, sign = operating_points(rng, n)
+    for k in range(n):
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k])
+        e = float(h @ truth) + rng.normal(0.0, noise)
+        if change is not None:
+            e += change(vp[k], other[k], th_s[k], sign[k])
+        t0 = feed(mon, t0, e, vp[k], other[k], th_s[k] * sign[k], sign[k])
+    return t0
+
+
+TRUTH = np.array([0.2, -0.15, 0.03, 0.01, -0.03])  # a pump unlike its model, a 3 % gain error
+
+
+def test_baseline_fit_recovers_the_coefficients_of_the_installation():
+    rng = np.random.default_rng(1)
+    learner = BaselineLearner((0.5, 0.5, 0.3, 0.3, 0.1))
+    vp, other, th_s, sign = operating_points(rng, 2000)
+    for k in range(vp.size):
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k])
+        learner.add(h, float(h @ TRUTH) + rng.normal(0.0, 0.02), 1.0, 0.25)
+    fit = learner.fit()
+    assert np.all(np.abs(fit.coefficients - TRUTH) < 4.0 * fit.std()), fit.coefficients
+    assert math.sqrt(fit.window_var_nm2) == pytest.approx(0.02, rel=0.1)
+
+
+def test_no_alarm_on_a_mismatched_pump_once_its_baseline_is_learnt():
+    mon = monitor()
+    run(mon, np.random.default_rng(2), 2000, TRUTH)  # 500 s: far beyond commissioning
+    assert not mon.learning and mon.level == OK
+    assert mon.cusum_pos_nm_s < 0.2 and mon.cusum_neg_nm_s < 0.2
+    assert abs(mon.theta_vp - 1.0) < 1.96 * mon.valve_plate_scale_std
+
+
+def test_learning_goes_on_while_the_pump_is_still_changing():
+    mon = monitor()
+    t = 0.0
+    rng = np.random.default_rng(3)
+    for step in range(8):  # friction falling as the oil warms: 20 % per 15 s of running
+        truth = TRUTH + np.array([0.6 * 0.8 ** step, 0.0, 0.0, 0.0, 0.0])
+        t = run(mon, rng, 60, truth, t0=t)
+    assert mon.commissioning.restarts >= 1
+    stationary = monitor()
+    run(stationary, np.random.default_rng(3), 480, TRUTH)
+    assert stationary.commissioning.restarts == 0 and not stationary.learning
+
+
+def _changed(cause, size):
+    """Extra friction-direction torque of one cause (relative to the healthy TRUTH)."""
+    def change(vp, other, th_s, sign):
+        return {'valve_plate': size * (1 + TRUTH[0]) * vp,
+                'other_friction': size * (1 + TRUTH[1]) * other,
+                'torque_gain': size * (th_s + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other
+                                       + TRUTH[2]),
+                'torque_offset': size * sign}[cause]
+    return change
+
+
+@pytest.mark.parametrize(('cause', 'size', 'verdict'), [
+    ('valve_plate', 0.8, Verdict.VALVE_PLATE), ('other_friction', 0.8, Verdict.OTHER_FRICTION),
+    ('torque_gain', -0.05, Verdict.NOT_FRICTION), ('torque_offset', 0.1, Verdict.NOT_FRICTION)])
+def test_a_single_change_is_detected_and_named(cause, size, verdict):
+    mon = monitor()
+    rng = np.random.default_rng(4)
+    t = run(mon, rng, 240, TRUTH)  # commissioning
+    assert not mon.learning and mon.level == OK
+    run(mon, rng, 240, TRUTH, change=_changed(cause, size), t0=t)
+    assert mon.level >= WARN
+    assert mon.verdict(1.0)[0] == verdict, mon.verdict(1.0)
+    if cause == 'valve_plate':  # the scale is relative to the healthy pump
+        assert abs(mon.theta_vp - 1.8) < 1.96 * mon.valve_plate_scale_std < 0.3
+
+
+def test_a_valve_plate_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed():
+    for assumed in (True, False):
+        mon = monitor(viscosity_assumed=assumed)
+        rng = np.random.default_rng(5)
+        t = run(mon, rng, 240, TRUTH)
+        run(mon, rng, 240, TRUTH, change=_changed('valve_plate', 0.8), t0=t)
+        verdict, words = mon.verdict(1.0)
+        assert verdict == Verdict.VALVE_PLATE
+        assert ('oil viscosity' in words) == assumed
+
+
+def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which():
+    mon = monitor()
+    rng = np.random.default_rng(6)
+    t = 0.0
+    for k in range(480):  # other friction always 2x the valve plate's: one shape
+        vp = float(rng.uniform(0.1, 0.5))
+        sign = 1.0 if k % 2 else -1.0
+        th_s = float(rng.uniform(-3.0, 3.0))
+        h = baseline_regressors(vp, 2.0 * vp, th_s, sign)
+        e = float(h @ TRUTH) + rng.normal(0.0, 0.01)
+        if k >= 240:
+            e += 0.8 * (1 + TRUTH[0]) * vp
+        t = feed(mon, t, e, vp, 2.0 * vp, th_s * sign, sign)
+    verdict, words = mon.verdict(1.0)
+    assert verdict == Verdict.CANNOT_TELL
+    assert 'valve plate' in words and 'other friction' in words and 'on this duty cycle' in words
+
+
+def test_state_dict_round_trip_resumes_exactly():
+    rng = np.random.default_rng(7)
+    one = monitor()
+    t = run(one, rng, 300, TRUTH, change=None)
+    two = monitor()
+    two.load_state_dict(one.state_dict())
+    assert two.state_dict() == one.state_dict()
+    for mon in (one, two):  # the same windows after the restart
+        run(mon, np.random.default_rng(8), 200, TRUTH, change=_changed('valve_plate', 0.8),
+            t0=t)
+    assert two.state_dict() == one.state_dict() and two.level == one.level >= WARN
+
+
+@pytest.mark.parametrize('bad', [{'version': 1}, {'version': WearMonitor.STATE_VERSION},
+                                 'not a dict'])
+def test_a_bad_state_is_refused_and_changes_nothing(bad):
+    mon = monitor()
+    run(mon, np.random.default_rng(9), 200, TRUTH)
+    before = mon.state_dict()
+    with pytest.raises(ValueError):
+        mon.load_state_dict(bad)
+    assert mon.state_dict() == before
