@@ -47,7 +47,15 @@ NS = 1_000_000_000
 T0 = 1_700_000_000 * NS
 CONFIG = EstimatorConfig(oil_viscosity_m2_s=46e-6, drive_loss_torque_nm=0.05)
 SPEED, DP = 300.0, 100e5
-N_WITHOUT_TORQUE, N_MONITORED = 50, 150
+N_WITHOUT_TORQUE, N_WITH_TORQUE = 50, 150
+SETTLE = round(CONFIG.monitor_settle_s * 1000)  # samples before the first monitored one
+LOOKAHEAD = round(CONFIG.monitor_lookahead_s * 1000)  # samples after the last
+N_MONITORED = N_WITH_TORQUE - SETTLE - LOOKAHEAD
+
+
+def first_last(start=0):
+    """Return the stamps of the first and the last monitored sample [ns]."""
+    return stamps()[N_WITHOUT_TORQUE + SETTLE] + start, stamps()[-1 - LOOKAHEAD] + start
 
 
 @pytest.fixture(scope='module')
@@ -61,15 +69,17 @@ def make(table, config=CONFIG):
 
 def stamps():
     """Stamps of the joint states [ns]: 1 kHz from T0."""
-    return [T0 + k * 1_000_000 for k in range(N_WITHOUT_TORQUE + N_MONITORED)]
+    return [T0 + k * 1_000_000 for k in range(N_WITHOUT_TORQUE + N_WITH_TORQUE)]
 
 
 def feed(core, extra_nm=0.3, start=0):
     """
     Feed steady running at SPEED and DP, stamps shifted by ``start`` [ns].
 
-    First joint states without torque (not learnt from), then N_MONITORED with a torque
-    ``extra_nm`` above the model (all learnt from).
+    First joint states without torque (not learnt from), then N_WITH_TORQUE with a torque
+    ``extra_nm`` above the model, learnt from once the running has settled (SETTLE samples)
+    and but for the last LOOKAHEAD (the monitor takes a sample once the running has gone on
+    steadily after it).
     """
     expected = core.table.lookup(SPEED, DP, 46e-6).input_nm + CONFIG.drive_loss_torque_nm
     for k, stamp in enumerate(stamps()):
@@ -82,7 +92,7 @@ def feed(core, extra_nm=0.3, start=0):
 
 def learnt_core(table):
     core = feed(make(table))
-    first, last = stamps()[N_WITHOUT_TORQUE], stamps()[-1]
+    first, last = first_last()
     assert core.learnt == (N_MONITORED, first, last)  # known by construction
     assert core.monitor.state_dict() != make(table).monitor.state_dict()  # it learnt
     return core
@@ -100,7 +110,7 @@ def test_round_trip_through_the_file_restores_the_monitor_state_exactly(table, t
     fresh = make(table)
     load_baseline(fresh, path)
     assert same(fresh.monitor.state_dict(), core.monitor.state_dict())
-    assert fresh.learnt == (N_MONITORED, stamps()[N_WITHOUT_TORQUE], stamps()[-1])
+    assert fresh.learnt == (N_MONITORED, *first_last())
 
 
 def test_learning_goes_on_after_a_restart_from_the_file(table, tmp_path):
@@ -110,12 +120,12 @@ def test_learning_goes_on_after_a_restart_from_the_file(table, tmp_path):
     restarted = make(table)
     load_baseline(restarted, path)
     feed(restarted, start=10 * NS)
-    assert restarted.learnt == (2 * N_MONITORED, stamps()[N_WITHOUT_TORQUE],
-                                stamps()[-1] + 10 * NS)
+    assert restarted.learnt == (2 * N_MONITORED, first_last()[0],
+                                first_last(10 * NS)[1])
 
 
 def test_the_chunk_path_records_the_same_learnt_span_as_on_input(table):
-    n = N_WITHOUT_TORQUE + N_MONITORED
+    n = N_WITHOUT_TORQUE + N_WITH_TORQUE
     joint = np.array(stamps(), dtype=np.int64)
     kinds = np.empty(2 * n, dtype=np.int64)
     kinds[0::2], kinds[1::2] = int(K.LOAD_PRESSURE), int(K.JOINT_STATE)
@@ -128,7 +138,7 @@ def test_the_chunk_path_records_the_same_learnt_span_as_on_input(table):
     torques = np.where(has_torque, expected + 0.3, math.nan)
     core.on_chunk(kinds, at, at, values, torques, np.ones(2 * n, dtype=bool), has_torque,
                   np.zeros(2 * n, dtype=np.int64))
-    assert core.learnt == (N_MONITORED, stamps()[N_WITHOUT_TORQUE], stamps()[-1])
+    assert core.learnt == (N_MONITORED, *first_last())
 
 
 def test_a_crash_mid_write_leaves_the_old_file_intact(table, tmp_path, monkeypatch):

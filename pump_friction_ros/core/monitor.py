@@ -359,12 +359,12 @@ class WearMonitor:
 
     @property
     def learner(self) -> BaselineLearner:
-        """The commissioning's sums (all of its stationary windows)."""
+        """Return the commissioning's sums (all of its stationary windows)."""
         return self.commissioning.learner
 
     @property
     def fit(self) -> Baseline:
-        """The commissioning's fit so far (the baseline, once complete)."""
+        """Return the commissioning's fit so far (the baseline, once complete)."""
         return self.commissioning.fit
 
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
