@@ -16,6 +16,7 @@
 
 import ast
 import csv
+import dataclasses
 from dataclasses import replace
 import math
 from pathlib import Path
@@ -233,33 +234,34 @@ def test_false_alarm_rates_delays_confusion_and_coverage_by_hand():
     assert fig['coverage_other']['bearing_x1.8'] != fig['coverage_other']['bearing_x1.8']  # n/a
     assert fig['coverage_other']['all'] == 1.0  # the exact ones: 1.0 +- 0.0196 holds 1.0
     table = format_table(fig)
-    assert '| valve_plate_x1.6: delay p50/p90 s' in table and '(1 nd)' in table
+    assert '| valve_plate_x1.6: delay p50/p90 [mon p90] s' in table and '(1 nd)' in table
 
 
 # -- the monitor adapter ----------------------------------------------------------------------
 
 def monitored_core(table, valve_plate, rest, loss):
-    """Return a core whose monitor saw 60 s of a pump with these true terms."""
-    core = TorqueEstimator(CONFIG, table, 46e-6, 'hong_doh_2004')
+    """Return a core whose monitor saw 40 s of a healthy pump, then 60 s with these terms."""
+    config = dataclasses.replace(CONFIG, baseline_learn_s=20.0)
+    core = TorqueEstimator(config, table, 46e-6, 'hong_doh_2004')
     core.on_input(InputKind.LOAD_PRESSURE, 0, 100e5)
     core.on_input(InputKind.JOINT_STATE, 0, 300.0, 10.0)
     rng = np.random.default_rng(5)
-    for k in range(60000):  # 60 s at 1 kHz; both directions, pump and motor mode
+    for k in range(100000):  # 100 s at 1 kHz; both directions, pump and motor mode
         sign = 1.0 if (k // 700) % 2 else -1.0
         vp, other = 1.0 + 0.5 * math.sin(k / 900), 0.8 + 0.3 * math.cos(k / 1300)
         theoretical = 8.0 * math.sin(k / 2100)
-        friction = valve_plate * vp + rest * other + loss + rng.normal(0.0, 0.05)
-        modelled = vp + other
-        core.monitor.update(k * 1e-3, 1e-3 if k % 700 else 0.0, (friction - modelled) * sign,
-                            friction, vp, 0.7 * other, 0.3 * other, theoretical, sign)
+        terms = (valve_plate, rest, loss) if k >= 40000 else (1.0, 1.0, 0.0)
+        friction = terms[0] * vp + terms[1] * other + terms[2] + rng.normal(0.0, 0.05)
+        core.monitor.update(k * 1e-3, 1e-3 if k % 700 else 0.0, friction - (vp + other), vp,
+                            other, theoretical, sign)
     return core
 
 
 @pytest.mark.parametrize(('valve_plate', 'rest', 'loss', 'expected', 'words'), [
     (1.5, 1.0, 0.0, 'valve_plate', ': valve plate'),
     (1.0, 1.6, 0.0, 'other_friction', 'not the valve plate'),
-    (1.0, 1.0, 0.3, 'not_friction', 'not friction: drive_loss'),
-    (1.0, 1.0, 0.0, 'none', 'as modelled'),
+    (1.0, 1.0, 0.3, 'not_friction', 'not friction: drive loss'),
+    (1.0, 1.0, 0.0, 'none', 'as the healthy baseline'),
 ])
 def test_read_monitor_agrees_with_the_diagnostics_message(table, valve_plate, rest, loss,
                                                           expected, words):

@@ -155,7 +155,7 @@ def test_parameters_come_from_the_yaml_file(ros, table_file):
 
 def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
     node = ros('cusum_warn_nm_s:=0.02', 'cusum_error_nm_s:=0.05', 'diagnostics_rate_hz:=20.0',
-               'monitor_max_accel_rad_s2:=1.0e9')
+               'monitor_max_accel_rad_s2:=1.0e9', 'baseline_learn_s:=1.0')
     probe = Probe()
     ex = SingleThreadedExecutor()
     ex.add_node(node)
@@ -172,11 +172,12 @@ def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
             levels.extend(level_from_msg(m.status[0].level) for m in probe.diagnostics)
             probe.diagnostics.clear()
 
-        end = time.monotonic() + 10.0
-        while 0 not in levels and time.monotonic() < end:  # OK before the wear step
-            send(0.0)
-        assert 0 in levels
-        for _ in range(600):
+        end = time.monotonic() + 20.0
+        while (0 not in levels or node.core.monitor.learning) and time.monotonic() < end:
+            send(0.0)  # OK, and the healthy baseline learnt, before the wear step
+        assert 0 in levels and not node.core.monitor.learning
+        end = time.monotonic() + 20.0
+        while node.core.monitor.level == 0 and time.monotonic() < end:
             send(1.0)  # +1 N m of friction: a simulated wear step
         spin_until(ex, lambda: probe.diagnostics, 1.0)
         levels += [level_from_msg(m.status[0].level) for m in probe.diagnostics]

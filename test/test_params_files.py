@@ -151,7 +151,7 @@ def test_the_issues_partial_params_file_on_the_healthy_sample_bag_raises_no_alar
                  '--quiet']) == 0
     out = capsys.readouterr().out
     assert f'node parameters from {REPO / "bags" / "eha_nominal" / "node_params.yaml"}' in out
-    assert 'no alarm' in out and 'friction as modelled' in out
+    assert 'no alarm' in out and 'torque as the healthy baseline' in out
 
 
 def test_each_sample_bag_carries_the_node_parameters_of_its_simulated_pump():

@@ -29,7 +29,7 @@ from pump_friction_ros.bags.fleet import discover_bags, ReplayJob, run_jobs
 from pump_friction_ros.bags.outputs import CSV_COLUMNS
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.bags.sinks import float64_cdr
-from pump_friction_ros.core.estimator import Estimate, TorqueEstimator
+from pump_friction_ros.core.estimator import Estimate, estimator_from_config, TorqueEstimator
 from pump_friction_ros.core.inputs import Defect, InputKind, inputs_for
 from pump_friction_ros.core.node_parameters import (
     EstimatorConfig,
@@ -452,20 +452,27 @@ def test_shipped_sample_bags_replay_as_documented():
                         r'and ends\s+with the valve-plate scale at ([\d.]+) \+- ([\d.]+) '
                         r'\(95 %;\s+the simulated truth is ([\d.]+)\)', page)
     warn_s, error_s, final, interval, truth = map(float, figures.groups())
-    nominal = replay_bag(REPO / 'bags' / 'eha_nominal', CONFIG)
-    wear = replay_bag(REPO / 'bags' / 'eha_valve_plate_wear', CONFIG)
+    learnt = estimator_from_config(CONFIG)  # commissioning on the nominal bag
+    nominal = replay_bag(REPO / 'bags' / 'eha_nominal', CONFIG, core=learnt)
+    core = estimator_from_config(CONFIG)
+    core.monitor.load_state_dict(learnt.monitor.state_dict())
+    wear = replay_bag(REPO / 'bags' / 'eha_valve_plate_wear', CONFIG, core=core)
     assert nominal.storage == 'sqlite3' and wear.storage == 'mcap'
     assert nominal.duration_s >= 60 and wear.duration_s >= 60
     assert nominal.messages_read == {'/joint_states': 75000, '/load_pressure': 37500}
     assert not nominal.warn_intervals and not nominal.error_intervals  # "stays OK"
+    assert not learnt.monitor.learning  # "teaches the healthy baseline"
     assert wear.warn_intervals[0][0] == pytest.approx(warn_s, abs=0.05)  # wear from 25 s
     assert wear.error_intervals[0][0] == pytest.approx(error_s, abs=0.05)
     assert wear.final_valve_plate_scale == pytest.approx(final, abs=5e-4)
     assert 1.96 * wear.final_valve_plate_scale_std == pytest.approx(interval, abs=5e-4)
     assert truth == 1.6 == WEAR_SCALE  # the wear the sample bag was made with
     assert abs(wear.final_valve_plate_scale - truth) < interval  # the interval holds the truth
-    defaults = replay_bag(REPO / 'bags' / 'eha_nominal', EstimatorConfig())
-    assert defaults.error_intervals  # docs/replay.md: without eha_params.yaml even nominal alarms
+    assert 'valve plate' in wear.attribution
+    defaults = estimator_from_config(EstimatorConfig())
+    replay_bag(REPO / 'bags' / 'eha_nominal', EstimatorConfig(), core=defaults)
+    level = 1.0 + defaults.monitor.baseline.coefficients[0]  # docs: "at 0.52 of the model"
+    assert level == pytest.approx(0.52, abs=0.005)
     for bag in ('eha_nominal', 'eha_valve_plate_wear'):
         size = sum(f.stat().st_size for f in (REPO / 'bags' / bag).iterdir())
         assert size < 5e6
