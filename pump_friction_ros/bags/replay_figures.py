@@ -146,5 +146,5 @@ def write_replay_figures(series: dict[str, list[float]], out_dir: Path, title: s
     ax.set(xlabel='time [s]', ylabel='scale [-] (1 = as modelled)',
            ylim=(min(0.8, float(both.min()) - 0.1), max(1.2, float(both.max()) + 0.1)))
     ax.legend(fontsize=8, loc='upper left')
-    save(fig, 'Friction scales (attribution filter)', 'friction_scales')
+    save(fig, 'Friction scales relative to the healthy baseline', 'friction_scales')
     return written

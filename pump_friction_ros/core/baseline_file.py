@@ -62,8 +62,10 @@ BASELINE_FORMAT_VERSION = 1
 PROVENANCE_PARAMETERS = (
     'joint_name', 'speed_source', 'torque_source', 'pressure_source', 'viscosity_source',
     'rotor_inertia_kg_m2', 'accel_filter_time_constant_s', 'drive_loss_torque_nm',
-    'monitor_min_speed_rad_s', 'monitor_max_accel_rad_s2')
-"""Node parameters that change the residual or which samples the monitor learns from; the
+    'monitor_min_speed_rad_s', 'monitor_max_accel_rad_s2', 'monitor_settle_s',
+    'monitor_lookahead_s', 'attribution_window_s')
+"""Node parameters that change the residual, which samples the monitor learns from or how
+it averages them into windows; the
 oil's (``oil_viscosity_m2_s``, or the two of the temperature law) join them by
 ``viscosity_source``. The detection and attribution tuning is not among them: retuning a
 threshold keeps what was learnt."""

@@ -76,9 +76,8 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
     Read level, attribution and friction scales from the estimator's monitor.
 
     The only place that knows the monitor's attributes. The attribution is the verdict the
-    status message gives (``diagnostics.level_message``): the attribution filter's, for the
-    side of the model the torque is on; an alarm whose filter sees no term stand out yet
-    counts as 'cannot_tell'.
+    status message gives (``diagnostics.level_message``): the isolation's single cause; an
+    alarm for which no cause stands out yet counts as 'cannot_tell'.
 
     Parameters
     ----------
