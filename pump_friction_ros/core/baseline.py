@@ -172,8 +172,8 @@ class BaselineLearner:
 
         """
         var = 0.01  # [N m^2] a first guess; two passes settle it
-        coef = np.zeros(N_TERMS)
-        cov = np.diag(1.0 / np.diag(self.prior_precision))
+        coef: np.ndarray = np.zeros(N_TERMS)
+        cov: np.ndarray = np.diag(1.0 / np.diag(self.prior_precision))
         for _ in range(3):
             precision = self.a / var + self.prior_precision
             cov = np.linalg.inv(precision)
