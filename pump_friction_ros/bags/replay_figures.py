@@ -143,7 +143,7 @@ def write_replay_figures(series: dict[str, list[float]], out_dir: Path, title: s
     shade(ax)
     learnt = d['vp_scale_std'] < 0.5 * config.scale_prior_std  # past the start-up
     both = np.concatenate([d['vp_scale'][learnt], d['other_scale'][learnt], [1.0]])
-    ax.set(xlabel='time [s]', ylabel='scale [-] (1 = as modelled)',
+    ax.set(xlabel='time [s]', ylabel='scale [-] (1 = as at commissioning)',
            ylim=(min(0.8, float(both.min()) - 0.1), max(1.2, float(both.max()) + 0.1)))
     ax.legend(fontsize=8, loc='upper left')
     save(fig, 'Friction scales relative to the healthy baseline', 'friction_scales')
