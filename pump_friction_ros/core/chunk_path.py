@@ -375,8 +375,7 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
     releases, released = core.settled.update_many(
         stamp.tolist(), restarts.tolist(),
         np.where(has_torque, measured - steady, math.nan).tolist(), steady_now.tolist(),
-        list(zip(inertia.tolist(), vp.tolist(), other.tolist(), theoretical.tolist(),
-                 speed.tolist(), strict=True)))
+        (inertia.tolist(), vp.tolist(), other.tolist(), theoretical.tolist(), speed.tolist()))
     monitored = np.zeros(stamp.size, dtype=bool)
     monitored[releases] = True
     monitor = core.monitor
@@ -384,7 +383,7 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
         monitor.level, monitor.cusum_pos_nm_s, monitor.cusum_neg_nm_s, monitor.theta_vp,
         monitor.theta_rest, monitor.valve_plate_scale_std, monitor.rest_scale_std)]
     if released:
-        trace = _monitor(core, released)
+        trace = _monitor(core, released, (inertia, vp, other, theoretical, speed))
         counts['monitor_samples'] += len(released)
         # each estimate carries the monitor's state after the latest monitored sample
         latest = np.cumsum(monitored)
@@ -420,27 +419,34 @@ def _efficiency(core: TorqueEstimator, theoretical: np.ndarray, steady: np.ndarr
     return np.where(undefined, math.nan, np.where(theoretical * speed > 0.0, pumping, motoring))
 
 
-def _monitor(core: TorqueEstimator, released: list[tuple[int, float, tuple[
-        float, float, float, float, float]]]) -> MonitorTrace:
-    """Feed the released settled samples to the wear monitor: `TorqueEstimator._monitor`."""
-    times, gaps, residuals, vps, others, theoreticals, signs = (
-        [], [], [], [], [], [], [])
+def _monitor(core: TorqueEstimator, released: list[tuple[int, float, object]],
+             columns: tuple[np.ndarray, ...]) -> MonitorTrace:
+    """
+    Feed the released settled samples to the wear monitor: `TorqueEstimator._monitor`.
+
+    ``released``: `SettledResidual.update_many`'s, payloads by position in ``columns``
+    (inertia, valve plate, other friction, theoretical torque, speed) or, for samples of an
+    earlier chunk, as tuples. The arithmetic is `_monitor`'s, element by element.
+    """
+    old = [entry for entry in released if not isinstance(entry[2], int)]  # a chunk before
+    at = np.array([entry[2] for entry in released[len(old):]], dtype=np.int64)
+    fields = [np.concatenate((np.array([cast(tuple, e[2])[j] for e in old], dtype=float),
+                              column[at])) for j, column in enumerate(columns)]
+    inertia, vp, other, theoretical, speed = fields
+    stamps = np.array([entry[0] for entry in released], dtype=np.int64)
+    filtered = np.array([entry[1] for entry in released])
+    sign = np.where(speed > 0.0, 1.0, -1.0)
     last = core._monitor_stamp_ns
     if last is None and core._learnt_first_ns is None:
-        core._learnt_first_ns = released[0][0]
-    max_dt = core._monitor_max_dt
-    inf = math.inf
-    for stamp, filtered, (inertia, vp, other, theoretical, speed) in released:
-        sign = 1.0 if speed > 0.0 else -1.0
-        # a clock restart (stamp resync) steps back: a new run for the monitor
-        gap = inf if last is None or stamp <= last else (stamp - last) * 1e-9
-        last = stamp
-        times.append(stamp * 1e-9)
-        gaps.append(gap if gap <= max_dt else 0.0)
-        residuals.append((filtered - inertia) * sign)
-        vps.append(vp)
-        others.append(other)
-        theoreticals.append(theoretical)
-        signs.append(sign)
-    core._monitor_stamp_ns = last
-    return core.monitor.update_many(times, gaps, residuals, vps, others, theoreticals, signs)
+        core._learnt_first_ns = int(stamps[0])
+    # the gap rule: a clock restart (stamp resync) steps back, a new run for the monitor
+    before = np.concatenate(([stamps[0] if last is None else last], stamps[:-1]))
+    step = stamps - before
+    gaps = np.where(step > 0, step * 1e-9, math.inf)
+    if last is None:
+        gaps[0] = math.inf
+    gaps = np.where(gaps <= core._monitor_max_dt, gaps, 0.0)
+    core._monitor_stamp_ns = int(stamps[-1])
+    return core.monitor.update_many((stamps * 1e-9).tolist(), gaps.tolist(),
+                                    ((filtered - inertia) * sign).tolist(), vp.tolist(),
+                                    other.tolist(), theoretical.tolist(), sign.tolist())

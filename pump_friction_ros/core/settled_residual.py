@@ -44,6 +44,7 @@ acceleration needs a few milliseconds to see a jerk). The monitor's samples ther
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 from typing import Any
 
 from .speed_filter import stage_coefficients
@@ -152,7 +153,7 @@ class SettledResidual:
         return None
 
     def update_many(self, stamps_ns: list[int], restarts: list[int], diffs_nm: list[float],
-                    steady: list[bool], payloads: list[Any]
+                    steady: list[bool], payloads: Sequence[list[Any]]
                     ) -> tuple[list[int], list[tuple[int, float, Any]]]:
         """
         Take many samples in order: `update` for each, in one loop (the chunk path).
@@ -169,13 +170,16 @@ class SettledResidual:
             Measured - static expected torque [N m] (NaN: none).
         steady : list of bool
             Above the minimum speed and below the acceleration limit.
-        payloads : list
-            Each sample's payload.
+        payloads : sequence of list
+            The payload's columns: sample i's payload is the tuple of their i-th items.
 
         Returns
         -------
         tuple of list
-            The positions of the samples that released one, and what each released.
+            The positions of the samples that released one, and what each released:
+            (stamp, filtered difference, payload) where the payload of a sample of this
+            call is its position (an int: the columns hold it), that of an earlier call's
+            sample its tuple. Samples still pending at the end keep their tuples.
 
         """
         tau, max_gap = self.tau_s, self.max_gap_ns
@@ -186,8 +190,8 @@ class SettledResidual:
         pending = self.pending
         positions: list[int] = []
         released: list[tuple[int, float, Any]] = []
-        for i, (stamp, count, x, ok, payload) in enumerate(zip(
-                stamps_ns, restarts, diffs_nm, steady, payloads, strict=True)):
+        for i, (stamp, count, x, ok) in enumerate(zip(stamps_ns, restarts, diffs_nm, steady,
+                                                       strict=True)):
             if x != x:
                 last = None
                 pending.clear()
@@ -212,10 +216,13 @@ class SettledResidual:
                 pending.clear()
                 continue
             if stamp - since >= settle:
-                pending.append((stamp, lp2, payload))
+                pending.append((stamp, lp2, i))
             if pending and stamp - pending[0][0] >= lookahead:
                 positions.append(i)
                 released.append(pending.popleft())
+        for k, (stamp, lp, payload) in enumerate(pending):  # they outlive the columns
+            if isinstance(payload, int):
+                pending[k] = (stamp, lp, tuple(column[payload] for column in payloads))
         self._lp1, self._lp2, self._x_prev = lp1, lp2, x_prev
         self._step_ns, self._coefficients = step_prev, (b, a, c)
         self._last_ns, self._restarts, self._steady_since_ns = last, seen, since
