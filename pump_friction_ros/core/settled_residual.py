@@ -190,8 +190,8 @@ class SettledResidual:
         pending = self.pending
         positions: list[int] = []
         released: list[tuple[int, float, Any]] = []
-        for i, (stamp, count, x, ok) in enumerate(zip(stamps_ns, restarts, diffs_nm, steady,
-                                                       strict=True)):
+        samples = zip(stamps_ns, restarts, diffs_nm, steady, strict=True)
+        for i, (stamp, count, x, ok) in enumerate(samples):
             if x != x:
                 last = None
                 pending.clear()
