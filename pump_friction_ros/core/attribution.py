@@ -57,7 +57,7 @@ import math
 
 import numpy as np
 
-from .baseline import Baseline
+from .baseline import Baseline, read_sums
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -66,6 +66,9 @@ CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torq
 """The single-cause explanations of a change, in signature order."""
 _VP, _OTHER = 0, 1
 _N = len(CAUSES)
+MIN_LEVEL = 0.2
+"""The uncertainty of a reported scale divides by the learnt friction level; a level below
+this times the model's is taken at it (a guard of the division, not a figure of the pump)."""
 _WORDS = {'valve_plate': 'valve plate', 'other_friction': 'other friction (bearing, '
           'joints, piston heads)', 'torque_gain': 'torque-measurement gain',
           'pressure_gain': 'pressure-sensor gain', 'torque_offset': 'torque offset',
@@ -307,7 +310,7 @@ class FaultIsolation:
             shown = named == i or (verdict == Verdict.CANNOT_TELL and (
                 int(np.nanargmax(np.nan_to_num(t, nan=-1.0))) == i))
             change = float(delta[i]) if shown and delta[i] == delta[i] else 0.0
-            level = max(1.0 + float(coef[i]), 0.2)
+            level = max(1.0 + float(coef[i]), MIN_LEVEL)
             var = noise * noise + floor * floor + (change * float(level_std[i]) / level) ** 2
             out += [1.0 + change, math.sqrt(var)]
         return out[0], out[1], out[2], out[3]
@@ -333,12 +336,8 @@ class FaultIsolation:
             Missing or malformed sums.
 
         """
-        g = np.asarray(state['g'], dtype=float)
-        b = np.asarray(state['b'], dtype=float)
-        if g.shape != (_N, _N) or b.shape != (_N,) or not np.all(np.isfinite(g)):
-            raise ValueError('isolation sums of the wrong shape or not finite')
+        (g, b), (c, count) = read_sums(state, {'g': (_N, _N), 'b': (_N,)}, ('c', 'count'),
+                                       'isolation')
         st = self.stats
-        st.g, st.b = g, b
-        st.c = float(state['c'])  # type: ignore[arg-type]
-        st.count = float(state['count'])  # type: ignore[arg-type]
+        st.g, st.b, st.c, st.count = g, b, c, count
         st.windows = int(state['windows'])  # type: ignore[call-overload]

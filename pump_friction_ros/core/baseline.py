@@ -46,7 +46,7 @@ import math
 import numpy as np
 
 __all__ = ['BASELINE_TERMS', 'Baseline', 'BaselineLearner', 'Commissioning',
-           'baseline_regressors']
+           'baseline_regressors', 'read_sums']
 
 BASELINE_TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
                   'torque_gain')
@@ -112,6 +112,44 @@ class Baseline:
     def std(self) -> np.ndarray:
         """Return the posterior standard deviations of b (`BASELINE_TERMS` order)."""
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+
+def read_sums(state: dict[str, object], arrays: dict[str, tuple[int, ...]],
+              scalars: tuple[str, ...], what: str
+              ) -> tuple[list[np.ndarray], list[float]]:
+    """
+    Read persisted weighted sums back: arrays of known shape and non-negative scalars.
+
+    Parameters
+    ----------
+    state : dict
+        The saved sums (plain values).
+    arrays : dict
+        Name and shape of each array.
+    scalars : tuple of str
+        Names of the scalar sums (weights, counts, sums of squares: >= 0).
+    what : str
+        Whose sums, for the message.
+
+    Returns
+    -------
+    tuple of list
+        The arrays, the scalars, in the order asked.
+
+    Raises
+    ------
+    ValueError
+        A missing entry, a wrong shape, a non-finite or negative value.
+
+    """
+    out = [np.asarray(state[name], dtype=float) for name in arrays]
+    if any(x.shape != shape or not np.all(np.isfinite(x))
+           for x, shape in zip(out, arrays.values(), strict=True)):
+        raise ValueError(f'{what} sums of the wrong shape or not finite')
+    values = [float(state[name]) for name in scalars]  # type: ignore[arg-type]
+    if not all(math.isfinite(x) and x >= 0.0 for x in values):
+        raise ValueError(f'{what} sums negative or not finite')
+    return out, values
 
 
 class BaselineLearner:
@@ -205,15 +243,9 @@ class BaselineLearner:
             Missing, malformed or non-finite sums.
 
         """
-        a = np.asarray(state['a'], dtype=float)
-        b = np.asarray(state['b'], dtype=float)
-        if a.shape != (N_TERMS, N_TERMS) or b.shape != (N_TERMS,) or \
-                not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-            raise ValueError('baseline sums of the wrong shape or not finite')
-        c, weight = float(state['c']), float(state['weight'])  # type: ignore[arg-type]
-        learnt = float(state['learnt_s'])  # type: ignore[arg-type]
-        if not all(math.isfinite(x) and x >= 0.0 for x in (c, weight, learnt)):
-            raise ValueError('baseline sums negative or not finite')
+        (a, b), (c, weight, learnt) = read_sums(
+            state, {'a': (N_TERMS, N_TERMS), 'b': (N_TERMS,)}, ('c', 'weight', 'learnt_s'),
+            'baseline')
         self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
         self.windows = int(state['windows'])  # type: ignore[call-overload]
 

@@ -68,9 +68,6 @@ LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
 MIN_WINDOW_SAMPLES = 10
 """A window with fewer monitored samples (a short burst between reversals) is not a
 measurement: its mean would carry more of the reversal than of the steady friction."""
-_MIN_LEVEL = 0.2
-"""A learnt friction level below this times the model's is not believed (the signature of
-a relative change is scaled by it)."""
 
 
 class MonitorTrace(NamedTuple):
@@ -120,7 +117,6 @@ class WearMonitor:
     def __init__(self, config: MonitorSettings, attribution: AttributionSettings,
                  drive_loss_nm: float = 0.0, viscosity_assumed: bool = False) -> None:
         self.settings = config
-        self.attribution_settings = attribution
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
         self._h_warn = config.cusum_warn_nm_s
