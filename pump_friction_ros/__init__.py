@@ -16,8 +16,9 @@
 Friction-torque model of a bent-axis hydraulic piston pump (Hong & Doh 2004) for ROS 2.
 
 Layers, lowest first, each a folder whose ``__init__`` says what it may import: the base
-modules here (errors, paths, yaml_files, progress, staging, plotting: they import only each
-other), physics, table, core, messages, sim, bags, calibration, evaluation, node, app.
+modules here (errors, paths, yaml_files, progress, staging, plotting, blas_threads: they
+import only each other), physics, table, core, messages, sim, bags, calibration, evaluation,
+node, app.
 docs/architecture.md draws them and says where a change goes.
 
 May import: base.

@@ -293,7 +293,7 @@ def test_speed_filter_update_many_equals_update():
     expected = [one.update(s, x) for s, x in zip(stamps, speeds, strict=True)]
     first, second = many.update_many(stamps[:1234], speeds[:1234]), \
         many.update_many(stamps[1234:], speeds[1234:])
-    assert exact(first[0] + second[0]) == exact(expected)
+    assert exact(np.concatenate((first[0], second[0]))) == exact(expected)
     assert first[1][-1] < second[1][-1] == one.restarts > 10  # the gaps restarted it
     assert exact(vars(many)) == exact(vars(one))
 

@@ -19,3 +19,7 @@ The top layer: it wires the others to the command line.
 
 May import: node, evaluation, calibration, bags, sim, messages, core, table, physics, base.
 """
+
+from ..blas_threads import limit_blas_threads
+
+limit_blas_threads()  # before numpy loads BLAS: see blas_threads

@@ -52,6 +52,7 @@ from .inputs import (
     TEMPERATURE_RANGE_C,
 )
 from .monitor import MonitorTrace
+from .settled_residual import Released
 
 if TYPE_CHECKING:  # the estimator imports this module
     from .estimator import TorqueEstimator
@@ -291,9 +292,9 @@ def _estimate_arrays(core: TorqueEstimator, kinds: np.ndarray, stamps: np.ndarra
     speed = _accept(core, '_speed', pick(speed_mask, values), MAX_SPEED_RAD_S)
     if not speed.positions.size:
         return _nothing()
-    accel, restarts = core.filter.update_many(speed.stamps.tolist(), speed.values.tolist())
-    return _estimates(core, speed, np.array(accel), np.array(restarts, dtype=np.int64), torque,
-                      pressure, port_a, port_b, temperature)
+    accel, restarts = core.filter.update_many(speed.stamps, speed.values)
+    return _estimates(core, speed, accel, restarts, torque, pressure, port_a, port_b,
+                      temperature)
 
 
 def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray,
@@ -372,19 +373,18 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
     steady_now = (np.abs(speed) >= core._monitor_min_speed) & \
         (np.abs(accel) <= core._monitor_max_accel)
     other = (bearing + joints) + heads
-    releases, released = core.settled.update_many(
-        stamp.tolist(), restarts.tolist(),
-        np.where(has_torque, measured - steady, math.nan).tolist(), steady_now.tolist(),
-        (inertia.tolist(), vp.tolist(), other.tolist(), theoretical.tolist(), speed.tolist()))
+    released = core.settled.update_many(
+        stamp, restarts, np.where(has_torque, measured - steady, math.nan), steady_now,
+        (inertia, vp, other, theoretical, speed))
     monitored = np.zeros(stamp.size, dtype=bool)
-    monitored[releases] = True
+    monitored[released.positions] = True
     monitor = core.monitor
     before: list[list[float]] = [[x] for x in (
         monitor.level, monitor.cusum_pos_nm_s, monitor.cusum_neg_nm_s, monitor.theta_vp,
         monitor.theta_rest, monitor.valve_plate_scale_std, monitor.rest_scale_std)]
-    if released:
+    if released.positions.size:
         trace = _monitor(core, released, (inertia, vp, other, theoretical, speed))
-        counts['monitor_samples'] += len(released)
+        counts['monitor_samples'] += released.positions.size
         # each estimate carries the monitor's state after the latest monitored sample
         latest = np.cumsum(monitored)
         state = [np.array(first + after)[latest]
@@ -419,7 +419,7 @@ def _efficiency(core: TorqueEstimator, theoretical: np.ndarray, steady: np.ndarr
     return np.where(undefined, math.nan, np.where(theoretical * speed > 0.0, pumping, motoring))
 
 
-def _monitor(core: TorqueEstimator, released: list[tuple[int, float, object]],
+def _monitor(core: TorqueEstimator, released: Released,
              columns: tuple[np.ndarray, ...]) -> MonitorTrace:
     """
     Feed the released settled samples to the wear monitor: `TorqueEstimator._monitor`.
@@ -428,13 +428,12 @@ def _monitor(core: TorqueEstimator, released: list[tuple[int, float, object]],
     (inertia, valve plate, other friction, theoretical torque, speed) or, for samples of an
     earlier chunk, as tuples. The arithmetic is `_monitor`'s, element by element.
     """
-    old = [entry for entry in released if not isinstance(entry[2], int)]  # a chunk before
-    at = np.array([entry[2] for entry in released[len(old):]], dtype=np.int64)
-    fields = [np.concatenate((np.array([cast(tuple, e[2])[j] for e in old], dtype=float),
+    old = released.carried
+    at = released.sources[len(old):]
+    fields = [np.concatenate((np.array([cast(tuple, e)[j] for e in old], dtype=float),
                               column[at])) for j, column in enumerate(columns)]
     inertia, vp, other, theoretical, speed = fields
-    stamps = np.array([entry[0] for entry in released], dtype=np.int64)
-    filtered = np.array([entry[1] for entry in released])
+    stamps, filtered = released.stamps_ns, released.filtered_nm
     sign = np.where(speed > 0.0, 1.0, -1.0)
     last = core._monitor_stamp_ns
     if last is None and core._learnt_first_ns is None:

@@ -25,33 +25,11 @@ over a record. Both are the same recursion (tested equal).
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-__all__ = ['SpeedFilter', 'filter_two_stage', 'stage_coefficients']
+from .lowpass import run_two_stage, stage_coefficients
 
-
-def stage_coefficients(dt_s: float, tau_s: float) -> tuple[float, float, float]:
-    """
-    Return (b, a, c) of one first-order-hold low-pass stage.
-
-    Parameters
-    ----------
-    dt_s : float
-        Sample spacing [s], > 0.
-    tau_s : float
-        Time constant [s], > 0.
-
-    Returns
-    -------
-    tuple of float
-        b = exp(-dt / tau), a = 1 - b, c = 1 - tau a / dt.
-
-    """
-    b = math.exp(-dt_s / tau_s)
-    a = 1.0 - b
-    return b, a, 1.0 - tau_s * a / dt_s
+__all__ = ['SpeedFilter', 'filter_two_stage', 'stage_coefficients']  # the last: lowpass's
 
 
 class SpeedFilter:
@@ -119,33 +97,62 @@ class SpeedFilter:
         b, a, c = self._coefficients
         lp1_old = self._lp1
         x_prev = self._x_prev
-        self._lp1 = b * lp1_old + a * x_prev + c * (speed_rad_s - x_prev)
-        self._lp2 = b * self._lp2 + a * lp1_old + c * (self._lp1 - lp1_old)
+        self._lp1 = b * lp1_old + (a * x_prev + c * (speed_rad_s - x_prev))
+        self._lp2 = b * self._lp2 + (a * lp1_old + c * (self._lp1 - lp1_old))
         self._x_prev = speed_rad_s
         self.accel_rad_s2 = (self._lp1 - self._lp2) / self.tau_s
         return self.accel_rad_s2
 
-    def update_many(self, stamps_ns: list[int], speeds_rad_s: list[float]
-                    ) -> tuple[list[float], list[int]]:
+    def update_many(self, stamps_ns: np.ndarray, speeds_rad_s: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
         """
-        Take many speed samples in order: `update` for each, in one loop (the chunk path).
+        Take many speed samples in order: `update` for each (the chunk path).
 
         The same operations in the same order as `update`, so the results and the state
-        left behind are identical to calling it sample by sample (``test_speed_filter``).
+        left behind are identical to calling it sample by sample (``test_speed_filter``,
+        ``test_lowpass``): over arrays (`lowpass.run_two_stage`) where the samples come
+        evenly spaced, else in one loop.
 
         Parameters
         ----------
-        stamps_ns : list of int
+        stamps_ns : ndarray of int64
             Sample times [ns].
-        speeds_rad_s : list of float
+        speeds_rad_s : ndarray of float
             Shaft speeds [rad/s].
 
         Returns
         -------
-        tuple of list
+        tuple of ndarray
             Filtered acceleration after each sample [rad/s^2], and `restarts` after each.
 
         """
+        stamps = np.asarray(stamps_ns, dtype=np.int64)
+        x = np.asarray(speeds_rad_s, dtype=float)
+        if not stamps.size:
+            return np.zeros(0), np.zeros(0, dtype=np.int64)
+        last = self._last_ns
+        steps = np.diff(stamps, prepend=stamps[0] if last is None else last)
+        start = (steps <= 0) | (steps > self.max_gap_ns)
+        if last is None:
+            start[0] = True
+        run = run_two_stage(stamps, x, start, 0 if last is None else last,
+                            (self._lp1, self._lp2, self._x_prev), self._step_ns,
+                            self._coefficients, self.tau_s)
+        if run is None:
+            looped, restarts = self._loop(stamps.tolist(), x.tolist())
+            return np.array(looped), np.array(restarts, dtype=np.int64)
+        accel = np.where(start, 0.0, (run.lp1 - run.lp2) / self.tau_s)
+        counts = self.restarts + np.cumsum(start)
+        self.restarts = int(counts[-1])
+        self._last_ns = int(stamps[-1])
+        self._step_ns, self._coefficients = run.step_ns, run.coefficients
+        self._lp1, self._lp2 = float(run.lp1[-1]), float(run.lp2[-1])
+        self._x_prev, self.accel_rad_s2 = float(x[-1]), float(accel[-1])
+        return accel, counts
+
+    def _loop(self, stamps_ns: list[int], speeds_rad_s: list[float]
+              ) -> tuple[list[float], list[int]]:
+        """`update` for each sample in one loop: `update_many` where the spacing varies."""
         tau, max_gap = self.tau_s, self.max_gap_ns
         restarts = self.restarts
         counts: list[int] = []
@@ -166,8 +173,8 @@ class SpeedFilter:
                     b, a, c = stage_coefficients(step * 1e-9, tau)
                     step_prev = step
                 lp1_old = lp1
-                lp1 = b * lp1_old + a * x_prev + c * (x - x_prev)
-                lp2 = b * lp2 + a * lp1_old + c * (lp1 - lp1_old)
+                lp1 = b * lp1_old + (a * x_prev + c * (x - x_prev))
+                lp2 = b * lp2 + (a * lp1_old + c * (lp1 - lp1_old))
                 x_prev = x
                 accel = (lp1 - lp2) / tau
             last = stamp

@@ -20,3 +20,7 @@ The only layer that imports rclpy: callbacks convert messages to SI (through
 
 May import: messages, core, table, physics, base.
 """
+
+from ..blas_threads import limit_blas_threads
+
+limit_blas_threads()  # before numpy loads BLAS: see blas_threads

@@ -39,6 +39,7 @@ from __future__ import annotations
 from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
+from functools import cached_property
 import json
 import math
 import os
@@ -252,8 +253,6 @@ class FrictionTable:
         self._s = self.speed_axis_rad_s.tolist()
         self._p = self.pressure_axis_pa.tolist()
         self._v = self.viscosity_axis_m2_s.tolist()
-        self._nodes = [tuple(row) for row in
-                       self.torque_nm.reshape(-1, len(COMPONENTS)).tolist()]  # Python floats
         self._last_s, self._last_p, self._last_v = ns - 1, npr - 1, nv - 1
         self._inv_ds, self._inv_dp, self._inv_dv = (
             (1.0 / np.diff(axis)).tolist() for axis in (
@@ -272,6 +271,11 @@ class FrictionTable:
         self.efficiency_min_speed_rad_s = float(self.metadata['efficiency_min_speed_rad_s'])
         self.efficiency_min_pressure_pa = float(self.metadata['efficiency_min_pressure_pa'])
         self.default_viscosity_m2_s = float(self.metadata['default_viscosity_m2_s'])
+
+    @cached_property
+    def _nodes(self) -> list[tuple[float, ...]]:
+        """Return the nodes as tuples of Python floats for the scalar path (made at first use)."""
+        return [tuple(row) for row in self.torque_nm.reshape(-1, len(COMPONENTS)).tolist()]
 
     # -- provenance -----------------------------------------------------------------------
 
