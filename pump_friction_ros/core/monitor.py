@@ -28,11 +28,14 @@ is dropped), and each window mean is one measurement:
    two halves agree (``_learn``); while the oil warms up they do not, and learning goes
    on. No alarm is raised meanwhile (the diagnostics say that the baseline is being
    learnt); the published scales are the fit's, against the model.
-2. **Detection.** The change d = e - e_hat from the baseline's prediction, projected on
-   each cause's signature (z_j = s_j d / rms(s_j), in N m at a typical operating point),
-   feeds a two-sided CUSUM per cause weighted by time, so that the thresholds do not depend
-   on the rates: S+ = max(0, S+ + (z - k) T) and S- = max(0, S- + (-z - k) T), in N m s (T
-   the window's running); S+ and S- reported are the largest of the causes'. (One sum on d
+2. **Detection.** The change d = e - e_hat from the baseline's prediction, less the
+   baseline's own uncertainty there (d shrunk towards 0 by ``cusum_baseline_sigmas``
+   times the prediction's standard deviation: at an operating point commissioning never
+   saw, the extrapolation error is not a change), projected on each cause's signature
+   (z_j = s_j d / rms(s_j), in N m at a typical operating point), feeds a two-sided CUSUM
+   per cause weighted by time, so that the thresholds do not depend on the rates:
+   S+ = max(0, S+ + (z - k) T) and S- = max(0, S- + (-z - k) T), in N m s (T the window's
+   running); S+ and S- reported are the largest of the causes'. (One sum on d
    would miss a torque-gain change, which raises d when pumping and lowers it when
    motoring.) WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
    ``cusum_error_nm_s``; a level clears only below ``cusum_clear_ratio`` times its
@@ -88,6 +91,7 @@ class MonitorSettings:
 
     ewma_time_constant_s: float
     cusum_drift_nm: float
+    cusum_baseline_sigmas: float
     cusum_warn_nm_s: float
     cusum_error_nm_s: float
     cusum_clear_ratio: float
@@ -119,6 +123,7 @@ class WearMonitor:
         self.settings = config
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
+        self._sigmas = config.cusum_baseline_sigmas
         self._h_warn = config.cusum_warn_nm_s
         self._h_error = config.cusum_error_nm_s
         self._clear = config.cusum_clear_ratio
@@ -326,7 +331,8 @@ class WearMonitor:
             self._learn(h, e, weight, duration)
             return
         d = e - baseline.predict(h)
-        var = baseline.window_var_nm2 / weight + baseline.prediction_var(h)
+        prediction_var = baseline.prediction_var(h)
+        var = baseline.window_var_nm2 / weight + prediction_var
         a = 1.0 - math.exp(-duration / self._tau)
         dev = d - self.ewma_nm
         self.ewma_nm += a * dev
@@ -334,8 +340,13 @@ class WearMonitor:
         # a CUSUM per cause on d projected on its signature, in N m at a typical point of
         # commissioning: a change of any cause's shape drives its own sum (a torque gain
         # moves d up when pumping and down when motoring, which one sum on d misses)
+        # the baseline's own uncertainty at this point is not a change: d shrunk by it (on a
+        # cycle reaching loads commissioning never saw, the extrapolation error alone would
+        # otherwise accumulate)
+        margin = self._sigmas * math.sqrt(prediction_var)
+        shrunk = d - margin if d > margin else (d + margin if d < -margin else 0.0)
         sig = self._m @ h
-        z = sig * d / self._norm
+        z = sig * shrunk / self._norm
         k, cap = self._k, self._cap
         self._pos = np.clip(self._pos + (z - k) * duration, 0.0, cap)
         self._neg = np.clip(self._neg + (-z - k) * duration, 0.0, cap)

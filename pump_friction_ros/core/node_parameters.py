@@ -177,7 +177,11 @@ class EstimatorConfig:
     cusum_drift_nm: float = _param(
         0.05, 'CUSUM allowance k: change from the healthy baseline (per cause, at a typical '
         'operating point) tolerated without accumulating [N m].', 0.0, 100.0)
-    cusum_warn_nm_s: float = _param(1.0, 'CUSUM level (integral of the change beyond k) for '
+    cusum_baseline_sigmas: float = _param(
+        2.0, "The healthy baseline's own prediction uncertainty at a window's operating point, "
+        'in standard deviations, is taken off the change before the CUSUM accumulates it '
+        '(a point commissioning never saw is not a fault) [-].', 0.0, 10.0)
+    cusum_warn_nm_s: float = _param(0.6, 'CUSUM level (integral of the change beyond k) for '
                                     'WARN [N m s].', 1e-6, 1e6)
     cusum_error_nm_s: float = _param(5.0, 'CUSUM level for ERROR [N m s].', 1e-6, 1e6)
     cusum_clear_ratio: float = _param(0.5, 'A level clears when the CUSUM falls below this '
