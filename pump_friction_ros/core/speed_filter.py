@@ -19,15 +19,17 @@ Each stage is the exact discretisation of tau y' = x - y for an input linear bet
 (first-order hold): y_k = b y_k-1 + a x_k-1 + c (x_k - x_k-1), with b = exp(-dt / tau),
 a = 1 - b, c = 1 - tau a / dt. A ramp then lags by exactly tau per stage at any sample
 spacing, and (lp1 - lp2) / tau is the slope of lp2. The estimator runs the scalar form
-(`SpeedFilter`) sample by sample; the calibration runs the array form (`filter_two_stage`)
-over a record. Both are the same recursion (tested equal).
+(`SpeedFilter`) sample by sample; the calibration runs the array form (`filter_two_stage`,
+`lowpass.run_two_stage`) over a record. Both are the same recursion (tested equal).
 """
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
-from .lowpass import run_two_stage, stage_coefficients
+from .lowpass import run_two_stage, stage_coefficients, TwoStage
 
 __all__ = ['SpeedFilter', 'filter_two_stage', 'stage_coefficients']  # the last: lowpass's
 
@@ -206,11 +208,10 @@ def filter_two_stage(x: np.ndarray, dt_s: float, tau_s: float) -> np.ndarray:
         The output of the second stage (same unit as ``x``).
 
     """
-    from scipy.signal import lfilter
-
-    b, a, c = stage_coefficients(dt_s, tau_s)
-    num, den = [c, a - c], [1.0, -b]
     y = np.asarray(x, dtype=float)
-    for _ in range(2):
-        y = lfilter(num, den, y - y[0]) + y[0]
-    return y
+    step_ns = max(1, round(dt_s * 1e9))  # the coefficients are dt_s's, given for this step
+    start = np.zeros(y.size, dtype=bool)
+    start[:1] = True
+    run = run_two_stage(np.arange(y.size, dtype=np.int64) * step_ns, y, start, 0,
+                        (0.0, 0.0, 0.0), step_ns, stage_coefficients(dt_s, tau_s), tau_s)
+    return cast(TwoStage, run).lp2  # one spacing: one run, never left to the loop
