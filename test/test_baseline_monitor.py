@@ -18,7 +18,12 @@ import math
 
 import numpy as np
 from pump_friction_ros.core.attribution import AttributionSettings, Verdict
-from pump_friction_ros.core.baseline import baseline_regressors, BaselineLearner
+from pump_friction_ros.core.baseline import (
+    baseline_regressors,
+    BaselineLearner,
+    Commissioning,
+    spd_inverse,
+)
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WARN, WearMonitor
 from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
 import pytest
@@ -34,43 +39,45 @@ def monitor(viscosity_assumed=False, **overrides):
 
 
 def operating_points(rng, n):
-    """Window operating points of a load-driven cycle: friction, theoretical torque, sign."""
+    """Window operating points of a load-driven cycle: friction, torque, sign, acceleration."""
     speed = rng.uniform(50.0, 900.0, n)
     vp = 0.05 + 4e-4 * speed  # film shear grows with speed
     other = 0.1 + rng.uniform(0.0, 0.4, n)  # grows with the load
     theoretical = rng.uniform(-3.0, 3.0, n)  # pumping and motoring
     sign = np.where(rng.random(n) < 0.5, 1.0, -1.0)
-    return vp, other, theoretical * sign, sign
+    accel = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(-800.0, 800.0, n))  # half steady
+    return vp, other, theoretical * sign, sign, accel * sign
 
 
-def feed(mon, t0, residual, vp, other, theoretical, sign):
+def feed(mon, t0, residual, vp, other, theoretical, sign, accel=0.0):
     """Feed one window of constant values; return the time after it."""
     for i in range(WINDOW_SAMPLES):
-        mon.update(t0 + i * DT, DT, residual, vp, other, theoretical, sign)
+        mon.update(t0 + i * DT, DT, residual, vp, other, theoretical, sign, accel)
     return t0 + WINDOW_SAMPLES * DT
 
 
 def run(mon, rng, n, truth, change=None, noise=0.01, t0=0.0):
     """Feed n windows; e = h . truth (+ the change's torque) + noise. Return the end time."""
-    vp, other, th_s, sign = operating_points(rng, n)
+    vp, other, th_s, sign, a_s = operating_points(rng, n)
     for k in range(n):
-        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k])
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])
         e = float(h @ truth) + rng.normal(0.0, noise)
         if change is not None:
-            e += change(vp[k], other[k], th_s[k], sign[k])
-        t0 = feed(mon, t0, e, vp[k], other[k], th_s[k] * sign[k], sign[k])
+            e += change(vp[k], other[k], th_s[k], sign[k], a_s[k])
+        t0 = feed(mon, t0, e, vp[k], other[k], th_s[k] * sign[k], sign[k], a_s[k] * sign[k])
     return t0
 
 
-TRUTH = np.array([0.2, -0.15, 0.03, 0.01, -0.03])  # a pump unlike its model, a 3 % gain error
+# a pump unlike its model, a 3 % gain error, a rotor 1.2e-4 kg m^2 heavier than configured
+TRUTH = np.array([0.2, -0.15, 0.03, 0.01, -0.03, 1.2e-4])
 
 
 def test_baseline_fit_recovers_the_coefficients_of_the_installation():
     rng = np.random.default_rng(1)
-    learner = BaselineLearner((0.5, 0.5, 0.3, 0.3, 0.1))
-    vp, other, th_s, sign = operating_points(rng, 2000)
+    learner = BaselineLearner((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4))
+    vp, other, th_s, sign, a_s = operating_points(rng, 2000)
     for k in range(vp.size):
-        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k])
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])
         learner.add(h, float(h @ TRUTH) + rng.normal(0.0, 0.02), 1.0, 0.25)
     fit = learner.fit()
     assert np.all(np.abs(fit.coefficients - TRUTH) < 4.0 * fit.std()), fit.coefficients
@@ -90,21 +97,21 @@ def test_learning_goes_on_while_the_pump_is_still_changing():
     t = 0.0
     rng = np.random.default_rng(3)
     for step in range(8):  # friction falling as the oil warms: 20 % per 15 s of running
-        truth = TRUTH + np.array([0.6 * 0.8 ** step, 0.0, 0.0, 0.0, 0.0])
+        truth = TRUTH + np.array([0.6 * 0.8 ** step, 0.0, 0.0, 0.0, 0.0, 0.0])
         t = run(mon, rng, 60, truth, t0=t)
     assert mon.commissioning.restarts >= 1
     stationary = monitor()
     run(stationary, np.random.default_rng(3), 480, TRUTH)
-    assert stationary.commissioning.restarts == 0 and not stationary.learning
+    assert stationary.commissioning.restarts <= 1 and not stationary.learning  # noise: rarely
 
 
 def _changed(cause, size):
     """Extra friction-direction torque of one cause (relative to the healthy TRUTH)."""
-    def change(vp, other, th_s, sign):
+    def change(vp, other, th_s, sign, a_s):
         return {'valve_plate': size * (1 + TRUTH[0]) * vp,
                 'other_friction': size * (1 + TRUTH[1]) * other,
                 'torque_gain': size * (th_s + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other
-                                       + TRUTH[2]),
+                                       + TRUTH[2] + TRUTH[5] * a_s),
                 'torque_offset': size * sign}[cause]
     return change
 
@@ -175,3 +182,59 @@ def test_a_bad_state_is_refused_and_changes_nothing(bad):
     with pytest.raises(ValueError):
         mon.load_state_dict(bad)
     assert mon.state_dict() == before
+
+
+def test_spd_inverse_inverts_and_refuses_a_matrix_that_is_not_positive_definite():
+    rng = np.random.default_rng(10)
+    for n in (1, 3, 6):
+        a = rng.normal(size=(n, n))
+        spd = a @ a.T + 0.1 * np.eye(n)
+        assert np.allclose(spd_inverse(spd) @ spd, np.eye(n), atol=1e-12)
+    with pytest.raises(ValueError, match='not positive definite'):
+        spd_inverse(np.array([[1.0, 2.0], [2.0, 1.0]]))  # eigenvalues 3 and -1
+
+
+def _settling_commissioning(settle_s, tau_s=600.0, wall_per_window_s=2.5, total_nm=0.3):
+    """
+    Commission on a pump whose valve-plate friction falls as exp(-t / tau) (oil warming).
+
+    Returns the drift still to come when the baseline completes, at a typical point [N m].
+    """
+    rng = np.random.default_rng(11)
+    com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, 0.025, settle_s)
+    vp, other, th_s, sign, a_s = operating_points(rng, 4000)
+    typical = float(np.mean(vp))
+    for k in range(vp.size):
+        t = k * wall_per_window_s  # 0.25 s windows, 10 % of the time monitored
+        warm = total_nm / typical * math.exp(-t / tau_s)  # relative extra friction
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])
+        e = float(h @ TRUTH) + warm * vp[k] + rng.normal(0.0, 0.01)
+        if com.add(h, e, 1.0, 0.25, t):
+            return total_nm * math.exp(-t / tau_s)
+    return 0.0  # never completed in 10,000 s
+
+
+def test_commissioning_waits_until_a_settling_pump_has_little_drift_left():
+    # the drift between the halves alone: completes while more of the warm-up is still to
+    # come than the CUSUM allowance (0.05 N m): an alarm after commissioning
+    assert _settling_commissioning(settle_s=0.0, tau_s=600.0) > 0.05
+    # extrapolated over the slowest settling: about the tolerance (0.025 N m) to come
+    for tau_s in (150.0, 300.0, 600.0, 900.0):
+        left = _settling_commissioning(settle_s=900.0, tau_s=tau_s)
+        assert 0.0 < left < 0.03, (tau_s, left)
+
+
+def test_a_steady_pump_completes_its_commissioning_at_once_or_nearly():
+    restarts = []
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, 0.025, 900.0)
+        vp, other, th_s, sign, a_s = operating_points(rng, 4000)
+        for k in range(vp.size):
+            h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])
+            if com.add(h, float(h @ TRUTH) + rng.normal(0.0, 0.02), 1.0, 0.25, 2.5 * k):
+                break
+        else:
+            pytest.fail('a steady pump never completed its commissioning')
+        restarts.append(com.restarts)
+    assert max(restarts) <= 2 and sum(restarts) <= 4, restarts

@@ -25,6 +25,7 @@ from pump_friction_ros.evaluation.eha_scenarios import (
     draw_eha,
     eha_estimator_config,
     fault_factor,
+    memory_weighted_factor,
 )
 from pump_friction_ros.evaluation.eha_settings import SensorSettings
 from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario
@@ -264,3 +265,24 @@ def test_bank_sizes_of_the_realistic_families():
     assert len(quick) <= 8 and all(s.duration_s <= 180.0 for s in quick)
     classic = [s for s in build_scenarios(FULL) if not s.family.realistic]
     assert all(s.fault.scope in ('classic', 'all') for s in classic)
+
+
+def test_the_intermittent_truth_is_the_factor_the_isolation_memory_holds():
+    n, dt = 20000, 1e-3
+    on = np.where((np.arange(n) // 2000) % 2 == 0, 1.8, 1.0)  # 2 s on, 2 s off
+    sig = np.full(n, 0.2)
+    taken = np.ones(n, dtype=bool)
+    # a memory far longer than the run: the plain mean, half on and half off
+    assert memory_weighted_factor(on, sig, taken, dt, 1e9) == pytest.approx(1.4, abs=1e-6)
+    # a memory of a few samples: the factor at the end (an off episode)
+    assert memory_weighted_factor(on, sig, taken, dt, 1e-4) == pytest.approx(1.0, abs=1e-6)
+    # the samples the monitor does not take do not count, and a larger signature weighs more
+    assert memory_weighted_factor(on, sig, on > 1.0, dt, 1e9) == pytest.approx(1.8)
+    big = np.where(on > 1.0, 0.4, 0.2)  # on-samples weigh 4x: (4 x 1.8 + 1) / 5
+    assert memory_weighted_factor(on, big, taken, dt, 1e9) == pytest.approx(1.64, abs=1e-6)
+    # exponential memory: closed form for a step at the middle, memory tau
+    step = np.where(np.arange(n) >= n // 2, 1.8, 1.0)
+    tau = 3.0
+    w_on = 1.0 - math.exp(-10.0 / tau)  # the last 10 s, relative weight
+    expected = 1.0 + 0.8 * w_on / (1.0 - math.exp(-20.0 / tau))
+    assert memory_weighted_factor(step, sig, taken, dt, tau) == pytest.approx(expected, abs=1e-3)

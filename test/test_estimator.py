@@ -187,7 +187,8 @@ def test_diagnostic_values_are_numbers_with_units_in_their_keys(table):
             continue
         float(text)  # every other value parses as a number (PlotJuggler graphs them)
         assert key in COUNTERS or key in ('level', 'efficiency', 'baseline_complete') or \
-            key.endswith(('_nm', '_nm_s', '_pa', '_rad_s', '_m2_s', '_s', 'scale', '_std'))
+            key.endswith(('_nm', '_nm_s', '_pa', '_rad_s', '_m2_s', '_kg_m2', '_s', 'scale',
+                          '_std'))
 
 
 def _feed(table, run, config=CONFIG):
@@ -273,8 +274,9 @@ def test_reversals_through_zero_speed_do_not_alarm(table):
 
 
 def test_alarm_clears_with_hysteresis_after_repair(table):
-    # the sums fall by k per second of monitored running from their cap: ~2 min
-    run = simulate_duty_cycle(table, DutyCycle(duration_s=300.0), seed=5,
+    # the sums fall by k per second of monitored running from their cap: (1.2 x 5 - 0.5 x
+    # 0.6) / 0.025 = 228 s of monitored running, 390 s here (~reset_monitor: at once)
+    run = simulate_duty_cycle(table, DutyCycle(duration_s=540.0), seed=5,
                               wear=lambda t: np.where((t > 30.0) & (t < 80.0), 1.6, 1.0))
     _, out = _feed(table, run, QUICK_BASELINE)
     levels = [e.level for e in out]

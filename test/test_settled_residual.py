@@ -122,3 +122,29 @@ def test_a_settle_time_of_zero_lets_the_trapezoid_corners_in(table):
                              monitor_max_accel_rad_s2=5000.0)
     residual, _, _ = monitored_residuals(table, speed, accel, config)
     assert np.abs(residual).max() > 0.05  # the settle time is what keeps them out
+
+
+def test_the_baseline_learns_a_misconfigured_rotor_inertia(table):
+    # the node is told 0.8 J: 0.2 J a (up to 0.2 N m where the monitor takes samples) is
+    # the installation's, not a fault; the baseline's inertia term takes it, the window
+    # scatter about the fit falls to the sampling's, and no alarm follows
+    speed, accel = p_loop((0.02, 0.05, 0.1) * 3)
+    config = EstimatorConfig(rotor_inertia_kg_m2=0.8 * J, drive_loss_torque_nm=0.03,
+                             baseline_learn_s=4.0)
+    est = TorqueEstimator(config, table, 46e-6)
+    dp = 120e5
+    nu = config.viscosity_m2_s(46e-6)
+    for k, (w, a) in enumerate(zip(speed.tolist(), accel.tolist(), strict=True)):
+        mags, _ = table.magnitudes(abs(w), dp, nu, w * dp < 0.0)
+        direction = smooth_sign_scalar(w, table.zero_speed_threshold_rad_s)
+        torque = input_torque_nm(theoretical_torque_nm(table.displacement_m3, dp), sum(mags),
+                                 direction, config.drive_loss_torque_nm) + J * a
+        est.on_input(K.LOAD_PRESSURE, (k + 1) * DT_NS, dp)
+        est.on_input(K.JOINT_STATE, (k + 1) * DT_NS, w, torque)
+    baseline = est.monitor.baseline
+    assert baseline is not None
+    learnt, std = baseline.coefficients[5], baseline.std()[5]
+    assert abs(learnt - 0.2 * J) < max(3.0 * std, 0.02 * J), (learnt, std)
+    assert std < 0.1 * J
+    assert math.sqrt(baseline.window_var_nm2) < 0.01
+    assert est.monitor.level == 0 and est.monitor.cusum_pos_nm_s < 0.1

@@ -24,7 +24,7 @@ cause               signature s_j                                delta_j
 ==================  ===========================================  =====================
 valve_plate         healthy valve-plate friction l_vp T_vp       relative change [-]
 other_friction      healthy other friction l_o T_o               relative change [-]
-torque_gain         healthy static torque T_th s + friction + L  relative gain [-]
+torque_gain         healthy T_th s + friction + L + J a s        relative gain [-]
 pressure_gain       -T_th s (a pressure read (1 + g) too high)   relative gain [-]
 torque_offset       s (does not turn with the motion)            [N m]
 drive_loss          1 (opposes the motion)                       [N m]
@@ -96,40 +96,45 @@ class AttributionSettings:
     scale_prior_std: float
     offset_prior_std_nm: float
     torque_gain_prior_std: float
+    inertia_prior_std_kg_m2: float
     attribution_z: float
     identifiability_correlation: float
     isolation_memory_s: float
     scale_systematic_std: float
 
 
-def signature_matrix(baseline: Baseline, drive_loss_nm: float) -> np.ndarray:
+def signature_matrix(baseline: Baseline, drive_loss_nm: float,
+                     rotor_inertia_kg_m2: float = 0.0) -> np.ndarray:
     """
     Return M such that the causes' signatures over a window are s = M h (`CAUSES` order).
 
     h is the window's regressor vector (``baseline.baseline_regressors``: T_vp, T_o, 1, s,
-    T_th s); every signature is linear in it.
+    T_th s, a s); every signature is linear in it.
 
     Parameters
     ----------
     baseline : Baseline
-        The healthy signature (its friction levels and drive loss).
+        The healthy signature (its friction levels, drive loss and inertia).
     drive_loss_nm : float
         The configured drive loss [N m].
+    rotor_inertia_kg_m2 : float
+        The configured rotor inertia [kg m^2]: a torque gain scales the measured J a too.
 
     Returns
     -------
-    ndarray, shape (6, 5)
+    ndarray, shape (6, 6)
         M [N m per unit of delta_j, per unit of h].
 
     """
     b = baseline.coefficients
     vp, other = 1.0 + b[0], 1.0 + b[1]
-    return np.array([[vp, 0.0, 0.0, 0.0, 0.0],  # valve plate, healthy level
-                     [0.0, other, 0.0, 0.0, 0.0],  # other friction, healthy level
-                     [vp, other, drive_loss_nm + b[2], 0.0, 1.0],  # the static torque
-                     [0.0, 0.0, 0.0, 0.0, -1.0],  # pressure read too high
-                     [0.0, 0.0, 0.0, 1.0, 0.0],  # torque offset
-                     [0.0, 0.0, 1.0, 0.0, 0.0]])  # drive loss
+    inertia = rotor_inertia_kg_m2 + b[5]
+    return np.array([[vp, 0.0, 0.0, 0.0, 0.0, 0.0],  # valve plate, healthy level
+                     [0.0, other, 0.0, 0.0, 0.0, 0.0],  # other friction, healthy level
+                     [vp, other, drive_loss_nm + b[2], 0.0, 1.0, inertia],  # measured torque
+                     [0.0, 0.0, 0.0, 0.0, -1.0, 0.0],  # pressure read too high
+                     [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],  # torque offset
+                     [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])  # drive loss
 
 
 class _ChangeStats:

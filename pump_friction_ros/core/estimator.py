@@ -141,7 +141,8 @@ class TorqueEstimator:
         self._eff_min_pressure = table.efficiency_min_pressure_pa
         self.monitor = WearMonitor(settings_view(config, MonitorSettings),
                                    settings_view(config, AttributionSettings),
-                                   config.drive_loss_torque_nm, not self._use_temperature)
+                                   config.drive_loss_torque_nm, not self._use_temperature,
+                                   config.rotor_inertia_kg_m2)
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,
@@ -407,7 +408,7 @@ class TorqueEstimator:
             released = self.settled.update(
                 stamp_ns, self.filter.restarts, measured - steady,
                 abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel,
-                (inertia, vp, bearing + joints + heads, theoretical, speed))
+                (inertia, vp, bearing + joints + heads, theoretical, speed, accel))
             if released is not None:
                 self._monitor(*released)
         else:
@@ -422,9 +423,9 @@ class TorqueEstimator:
         return estimate
 
     def _monitor(self, stamp_ns: int, filtered_nm: float,
-                 payload: tuple[float, float, float, float, float]) -> None:
+                 payload: tuple[float, float, float, float, float, float]) -> None:
         """Feed one settled sample (released by `SettledResidual`) to the wear monitor."""
-        inertia, vp, other, theoretical, speed = payload
+        inertia, vp, other, theoretical, speed, accel = payload
         sign = 1.0 if speed > 0.0 else -1.0
         last = self._monitor_stamp_ns
         if last is None and self._learnt_first_ns is None:
@@ -433,7 +434,8 @@ class TorqueEstimator:
         gap = math.inf if last is None or stamp_ns <= last else (stamp_ns - last) * 1e-9
         self._monitor_stamp_ns = stamp_ns
         self.monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
-                            (filtered_nm - inertia) * sign, vp, other, theoretical, sign)
+                            (filtered_nm - inertia) * sign, vp, other, theoretical, sign,
+                            accel)
         self.counts['monitor_samples'] += 1
 
     # -- diagnostics ----------------------------------------------------------------------

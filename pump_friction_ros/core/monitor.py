@@ -24,10 +24,10 @@ is dropped), and each window mean is one measurement:
 
 1. **Commissioning.** ``baseline_learn_s`` of stationary monitored running teach the
    installation's healthy signature (``baseline``): friction levels, drive loss, torque
-   offset and gain against the model, and the window noise. Stationary: the fits of its
-   two halves agree (``_learn``); while the oil warms up they do not, and learning goes
-   on. No alarm is raised meanwhile (the diagnostics say that the baseline is being
-   learnt); the published scales are the fit's, against the model.
+   offset and gain against the model, the effective rotor inertia, and the window noise.
+   Stationary: the fits of its two halves agree (``_learn``); while the oil warms up they
+   do not, and learning goes on. No alarm is raised meanwhile (the diagnostics say that the
+   baseline is being learnt); the published scales are the fit's, against the model.
 2. **Detection.** The change d = e - e_hat from the baseline's prediction, less the
    baseline's own uncertainty there (d shrunk towards 0 by ``cusum_baseline_sigmas``
    times the prediction's standard deviation: at an operating point commissioning never
@@ -57,12 +57,13 @@ from typing import NamedTuple
 import numpy as np
 
 from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
-from .baseline import Baseline, baseline_regressors, BaselineLearner, Commissioning
+from .baseline import Baseline, baseline_regressors, BaselineLearner, Commissioning, N_TERMS
+from .monitor_state import ERROR, MonitorPersistence, OK, WARN
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
 
-OK, WARN, ERROR, STALE = 0, 1, 2, 3
+STALE = 3
 CUSUM_CAP_RATIO = 1.2
 """The sums are capped at this times the ERROR threshold, so that after a repair the level
 clears in a bounded time (about (1.2 - clear ratio x warn / error) x error / k seconds of
@@ -96,9 +97,10 @@ class MonitorSettings:
     cusum_error_nm_s: float
     cusum_clear_ratio: float
     baseline_learn_s: float
+    baseline_settle_time_constant_s: float
 
 
-class WearMonitor:
+class WearMonitor(MonitorPersistence):
     """
     Stateful wear monitor; feed it one settled friction-direction sample at a time.
 
@@ -112,14 +114,14 @@ class WearMonitor:
         The configured drive loss [N m] (part of the torque-gain signature).
     viscosity_assumed : bool
         The oil viscosity is a parameter, not measured (changes the valve-plate verdict).
+    rotor_inertia_kg_m2 : float
+        The configured rotor inertia [kg m^2] (part of the torque-gain signature).
 
     """
 
-    STATE_VERSION = 2
-    """Version of `state_dict`'s layout; `load_state_dict` refuses others."""
-
     def __init__(self, config: MonitorSettings, attribution: AttributionSettings,
-                 drive_loss_nm: float = 0.0, viscosity_assumed: bool = False) -> None:
+                 drive_loss_nm: float = 0.0, viscosity_assumed: bool = False,
+                 rotor_inertia_kg_m2: float = 0.0) -> None:
         self.settings = config
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
@@ -130,11 +132,13 @@ class WearMonitor:
         self._cap = CUSUM_CAP_RATIO * config.cusum_error_nm_s
         self._window_s = attribution.attribution_window_s
         self._drive_loss = drive_loss_nm
+        self._inertia = rotor_inertia_kg_m2
         self._floor = attribution.scale_systematic_std
         prior = ((attribution.scale_prior_std,) * 2 + (attribution.offset_prior_std_nm,) * 2
-                 + (attribution.torque_gain_prior_std,))
+                 + (attribution.torque_gain_prior_std, attribution.inertia_prior_std_kg_m2))
         self.commissioning = Commissioning(prior, config.baseline_learn_s,
-                                           0.5 * config.cusum_drift_nm)
+                                           0.5 * config.cusum_drift_nm,
+                                           config.baseline_settle_time_constant_s)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self.reset()
 
@@ -166,7 +170,7 @@ class WearMonitor:
         self._sign = sign
         self._n = 0
         self._time = 0.0
-        self._se = self._svp = self._so = self._sth = 0.0
+        self._se = self._svp = self._so = self._sth = self._sa = 0.0
 
     @property
     def residual_std_nm(self) -> float:
@@ -207,7 +211,8 @@ class WearMonitor:
     # -- samples --------------------------------------------------------------------------
 
     def update(self, t_s: float, dt_s: float, residual_nm: float, valve_plate_nm: float,
-               other_nm: float, theoretical_nm: float, sign: float) -> int:
+               other_nm: float, theoretical_nm: float, sign: float,
+               accel_rad_s2: float = 0.0) -> int:
         """
         Take one settled sample.
 
@@ -227,6 +232,8 @@ class WearMonitor:
             Theoretical torque V_g dp / 2 pi from the measured pressure [N m].
         sign : float
             Direction of rotation, +1 or -1.
+        accel_rad_s2 : float
+            Filtered acceleration the residual's inertia part was computed with [rad/s^2].
 
         Returns
         -------
@@ -244,6 +251,7 @@ class WearMonitor:
         self._svp += valve_plate_nm
         self._so += other_nm
         self._sth += theoretical_nm * sign
+        self._sa += accel_rad_s2 * sign
         if self._time >= self._window_s:
             self._close(t_s)
             self._open(sign)
@@ -251,7 +259,8 @@ class WearMonitor:
 
     def update_many(self, t_s: list[float], dt_s: list[float], residual_nm: list[float],
                     valve_plate_nm: list[float], other_nm: list[float],
-                    theoretical_nm: list[float], sign: list[float]) -> MonitorTrace:
+                    theoretical_nm: list[float], sign: list[float],
+                    accel_rad_s2: list[float] | None = None) -> MonitorTrace:
         """
         Take many settled samples in order: `update` for each, in one lean loop.
 
@@ -266,6 +275,8 @@ class WearMonitor:
             Per sample, as `update` takes them [N m].
         sign : list of float
             Direction of rotation per sample, +1 or -1.
+        accel_rad_s2 : list of float, optional
+            Filtered acceleration per sample [rad/s^2] (None: 0).
 
         Returns
         -------
@@ -275,17 +286,18 @@ class WearMonitor:
         """
         window = self._window_s
         cur_sign, n, time = self._sign, self._n, self._time
-        se, svp, so, sth = self._se, self._svp, self._so, self._sth
+        se, svp, so, sth, sa = self._se, self._svp, self._so, self._sth, self._sa
+        accel = [0.0] * len(t_s) if accel_rad_s2 is None else accel_rad_s2
         # the state changes only when a window closes: kept as (from sample i, state) runs
         runs = [(0, self._trace_state())]
-        for i, (t, dt, r, vp, other, th, sgn) in enumerate(zip(
-                t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign,
+        for i, (t, dt, r, vp, other, th, sgn, a) in enumerate(zip(
+                t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign, accel,
                 strict=True)):
             if sgn != cur_sign:
-                self._sign, self._n, self._time, self._se, self._svp, self._so, self._sth = (
-                    cur_sign, n, time, se, svp, so, sth)
+                self._sign, self._n, self._time = cur_sign, n, time
+                self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
                 self._close(t)
-                cur_sign, n, time, se, svp, so, sth = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0
+                cur_sign, n, time, se, svp, so, sth, sa = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
                 runs.append((i, self._trace_state()))
             n += 1
             time += dt
@@ -293,16 +305,17 @@ class WearMonitor:
             svp += vp
             so += other
             sth += th * sgn
+            sa += a * sgn
             if time >= window:
-                self._sign, self._n, self._time, self._se, self._svp, self._so, self._sth = (
-                    cur_sign, n, time, se, svp, so, sth)
+                self._sign, self._n, self._time = cur_sign, n, time
+                self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
                 self._close(t)
-                n, time, se, svp, so, sth = 0, 0.0, 0.0, 0.0, 0.0, 0.0
+                n, time, se, svp, so, sth, sa = 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
                 runs.append((i, self._trace_state()))
         total = len(t_s)
         self.samples += total
         self._sign, self._n, self._time = cur_sign, n, time
-        self._se, self._svp, self._so, self._sth = se, svp, so, sth
+        self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
         columns: tuple[list, ...] = ([], [], [], [], [], [], [])
         for (start, state), (end, _) in zip(runs, [*runs[1:], (total, ())], strict=True):
             if end > start:
@@ -322,13 +335,14 @@ class WearMonitor:
         if n < MIN_WINDOW_SAMPLES or not duration > 0.0:
             return
         inv = 1.0 / n
-        h = baseline_regressors(self._svp * inv, self._so * inv, self._sth * inv, self._sign)
+        h = baseline_regressors(self._svp * inv, self._so * inv, self._sth * inv, self._sign,
+                                self._sa * inv)
         e = self._se * inv
         weight = duration / self._window_s
         self.windows += 1
         baseline = self.baseline
         if baseline is None:
-            self._learn(h, e, weight, duration)
+            self._learn(h, e, weight, duration, t_s)
             return
         d = e - baseline.predict(h)
         prediction_var = baseline.prediction_var(h)
@@ -374,9 +388,10 @@ class WearMonitor:
         """Return the commissioning's fit so far (the baseline, once complete)."""
         return self.commissioning.fit
 
-    def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float) -> None:
+    def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
+               t_s: float) -> None:
         """Add a commissioning window; complete the baseline once learnt and stationary."""
-        if self.commissioning.add(h, e_nm, weight, duration_s):
+        if self.commissioning.add(h, e_nm, weight, duration_s, t_s):
             self.baseline = self.fit
             self._reset_detection()
         else:
@@ -385,10 +400,10 @@ class WearMonitor:
     def _set_signatures(self) -> None:
         """Make the causes' signature matrix and its RMS per cause over commissioning."""
         if self.baseline is None:
-            self._m = np.zeros((len(CAUSES), 5))
+            self._m = np.zeros((len(CAUSES), N_TERMS))
             self._norm = np.ones(len(CAUSES))
             return
-        self._m = signature_matrix(self.baseline, self._drive_loss)
+        self._m = signature_matrix(self.baseline, self._drive_loss, self._inertia)
         second = self._m @ self.learner.a @ self._m.T / max(self.learner.weight, 1e-300)
         self._norm = np.sqrt(np.maximum(np.diag(second), 1e-12))
 
@@ -411,82 +426,3 @@ class WearMonitor:
         if s >= self._h_warn or (self.level >= WARN and s > self._clear * self._h_warn):
             return WARN
         return OK
-
-    # -- persistence ----------------------------------------------------------------------
-
-    def state_dict(self) -> dict[str, object]:
-        """
-        Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
-
-        The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
-        and the isolation's sums; not the open window (a fraction of a second).
-
-        Returns
-        -------
-        dict
-            ``version`` and the learnt state; `load_state_dict` restores it exactly.
-
-        """
-        return {'version': self.STATE_VERSION, 'samples': self.samples,
-                'windows': self.windows, 'commissioning': self.commissioning.state(),
-                'baseline_complete': self.baseline is not None,
-                'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
-                'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
-                'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
-                'isolation': self.isolation.state()}
-
-    def load_state_dict(self, state: dict[str, object]) -> None:
-        """
-        Restore what `state_dict` returned.
-
-        Parameters
-        ----------
-        state : dict
-            A `state_dict` result (e.g. read back from the node's baseline file).
-
-        Raises
-        ------
-        ValueError
-            A state of another version, or missing or malformed entries (the monitor is
-            then left as it was).
-
-        """
-        if not isinstance(state, dict) or state.get('version') != self.STATE_VERSION:
-            version = state.get('version') if isinstance(state, dict) else None
-            raise ValueError(f'monitor state version {version!r}, expected '
-                             f'{self.STATE_VERSION}')
-        saved = self.state_dict()
-        try:
-            self._load(state)
-        except (KeyError, TypeError, ValueError, IndexError) as exc:
-            self._load(saved)
-            raise ValueError(f'malformed monitor state: {exc}') from None
-
-    def _load(self, state: dict[str, object]) -> None:
-        self.commissioning.load(state['commissioning'])  # type: ignore[arg-type]
-        self.isolation.load(state['isolation'])  # type: ignore[arg-type]
-        self.samples = int(state['samples'])  # type: ignore[call-overload]
-        self.windows = int(state['windows'])  # type: ignore[call-overload]
-        self.baseline = self.fit if state['baseline_complete'] else None
-        ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
-            'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
-        pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)
-        neg = np.asarray(state['cusum_neg_nm_s'], dtype=float)
-        if pos.shape != (len(CAUSES),) or neg.shape != pos.shape or not (
-                np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
-                and math.isfinite(ewma) and math.isfinite(var)):
-            raise ValueError('monitor sums of the wrong shape or not finite')
-        self._set_signatures()
-        self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
-        self._pos, self._neg = pos, neg
-        self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
-        level = int(state['level'])  # type: ignore[call-overload]
-        if level not in (OK, WARN, ERROR):
-            raise ValueError(f'monitor level {level}')
-        self.level = level
-        self._open(0.0)
-        if self.baseline is None:
-            self._publish_fit()
-        else:
-            self.theta_vp, self.valve_plate_scale_std, self.theta_rest, \
-                self.rest_scale_std = self.isolation.scales(self.baseline)

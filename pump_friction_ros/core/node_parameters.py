@@ -175,7 +175,7 @@ class EstimatorConfig:
     ewma_time_constant_s: float = _param(2.0, "Time constant of the residual's EWMA [s].",
                                          1e-3, 1e5)
     cusum_drift_nm: float = _param(
-        0.05, 'CUSUM allowance k: change from the healthy baseline (per cause, at a typical '
+        0.025, 'CUSUM allowance k: change from the healthy baseline (per cause, at a typical '
         'operating point) tolerated without accumulating [N m].', 0.0, 100.0)
     cusum_baseline_sigmas: float = _param(
         2.0, "The healthy baseline's own prediction uncertainty at a window's operating point, "
@@ -196,6 +196,11 @@ class EstimatorConfig:
     baseline_learn_s: float = _param(
         30.0, 'Monitored running that teaches the healthy baseline (commissioning); no alarm '
         'until it is learnt [s].', 1.0, 1e7)
+    baseline_settle_time_constant_s: float = _param(
+        900.0, 'Slowest settling the commissioning waits for once it has seen the pump '
+        'change (an oil warm-up without temperature input): the drift between its halves, '
+        'extrapolated over this time constant, must stay below half the CUSUM allowance [s]; '
+        '0: the drift alone.', 0.0, 1e6)
     attribution_window_s: float = _param(
         0.25, 'Monitored running averaged into one measurement of the baseline and the '
         'isolation [s].', 0.01, 60.0)
@@ -208,6 +213,10 @@ class EstimatorConfig:
         0.1, 'Prior standard deviation of the gain error of the measured torque against the '
         'theoretical one (torque constant, pressure sensor) in the baseline fit [-].', 1e-4,
         10.0)
+    inertia_prior_std_kg_m2: float = _param(
+        2.0e-4, 'Prior standard deviation of the error of the effective rotor inertia in the '
+        'baseline fit (data-sheet rotor and coupling, and the drive sampling current and '
+        'encoder apart) [kg m^2].', 1e-9, 10.0)
     attribution_z: float = _param(
         3.0, 'A single cause explains the change when its likelihood-ratio statistic reaches '
         'z^2 and leads the runner-up by z^2 [standard deviations].', 0.5, 20.0)

@@ -59,8 +59,8 @@ from ..physics.oil import WaltherViscosity
 from ..physics.pump_parameters import load_pump
 from ..table.friction_table import FrictionTable
 
-__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor', 'oil_temperature',
-           'simulate_eha']
+__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor',
+           'memory_weighted_factor', 'oil_temperature', 'simulate_eha']
 
 _PLANT_STREAM = 2  # sub-stream of the scenario's seed for the draws (the noise: its own)
 _EPISODE_STREAM = 3  # sub-stream of the intermittent fault's episodes
@@ -226,6 +226,42 @@ def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp
     return np.where(inside % 2 == 1, value, 1.0)  # odd: inside an 'on' episode
 
 
+def memory_weighted_factor(factor: np.ndarray, signature_nm: np.ndarray, taken: np.ndarray,
+                           dt_s: float, memory_s: float) -> float:
+    """
+    Return the friction factor the isolation's memory holds at the end of a run.
+
+    The isolation estimates a cause's change as sum s d / sum s^2 over its windows, older
+    ones weighted by exp(-age / memory) in monitored running (``attribution``). With
+    d = (f - 1) s that is the s^2- and memory-weighted mean of f: the truth an intermittent
+    fault's estimate can be held to (the factor at the end is on or off by chance).
+
+    Parameters
+    ----------
+    factor : ndarray
+        The fault's factor per sample [-].
+    signature_nm : ndarray
+        The cause's healthy friction magnitude per sample [N m].
+    taken : ndarray of bool
+        Samples the monitor takes (running, after the onset).
+    dt_s : float
+        Sample period [s].
+    memory_s : float
+        ``isolation_memory_s`` [s of monitored running].
+
+    Returns
+    -------
+    float
+        The weighted factor (the factor at the end where no sample is taken).
+
+    """
+    if not taken.any():
+        return float(factor[-1])
+    age = (np.count_nonzero(taken) - np.cumsum(taken)[taken]) * dt_s
+    weight = np.exp(-age / memory_s) * signature_nm[taken] ** 2
+    return float(np.sum(weight * factor[taken]) / np.sum(weight))
+
+
 def _ratio(true: np.ndarray, model: np.ndarray) -> float:
     """Least-squares ratio of true to modelled magnitudes (nan without samples)."""
     den = float(np.dot(model, model))
@@ -286,6 +322,10 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     # the truths are relative to the healthy true pump: the monitor reports the change
     # from its learnt baseline (other friction: the healthy-weighted ratio of its parts)
     vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
+    if fault.intermittent:  # on and off: the level over the isolation's memory
+        vp_truth = memory_weighted_factor(np.broadcast_to(factors['valve_plate'], t.shape),
+                                          np.abs(true['valve_plate_nm']), gate & (t >= onset),
+                                          dt, config.isolation_memory_s)
     other_true = sum(float(np.atleast_1d(factors[c])[-1]) * np.abs(true[f'{c}_nm'][gate])
                      for c in COMPONENTS[1:])
     other_healthy = sum(np.abs(true[f'{c}_nm'][gate]) for c in COMPONENTS[1:])

@@ -303,7 +303,8 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               'of the monitored running in that delay) (nearest rank; nd = not '
               'detected, counted as infinite). vp..none: attribution at the end of the runs. '
               'err: reported - true scale at the end, median; cov: runs whose value +- 1.96 '
-              'std holds the truth (other: where all other components share one factor). '
+              'std holds the truth (other: where all other components share one factor; '
+              'an intermittent fault: the factor the isolation memory holds at the end). '
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')
     out += ['', legend]
     if result is not None:

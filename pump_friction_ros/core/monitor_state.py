@@ -1,0 +1,157 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What the wear monitor has learnt, as plain values: the node keeps it across restarts.
+
+`MonitorPersistence` is the part of ``monitor.WearMonitor`` that writes its state out and
+reads it back (the node's ``baseline_file``, docs/node.md): the baseline's sums and
+whether it is complete, the CUSUM sums, the level and the EWMA, the isolation's sums; not
+the open window (a fraction of a second). A state of another layout or a malformed one is
+refused and changes nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .attribution import CAUSES
+
+if TYPE_CHECKING:
+    from .attribution import FaultIsolation
+    from .baseline import Baseline, Commissioning
+
+__all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence']
+
+OK, WARN, ERROR = 0, 1, 2
+
+
+class MonitorPersistence:
+    """The wear monitor's `state_dict` / `load_state_dict` (a mixin of ``WearMonitor``)."""
+
+    STATE_VERSION = 3
+    """Version of `state_dict`'s layout; `load_state_dict` refuses others (3: the baseline
+    learns the rotor inertia)."""
+
+    commissioning: Commissioning
+    isolation: FaultIsolation
+    baseline: Baseline | None
+    samples: int
+    windows: int
+    ewma_nm: float
+    alarm_onset_s: float
+    level: int
+    cusum_pos_nm_s: float
+    cusum_neg_nm_s: float
+    theta_vp: float
+    theta_rest: float
+    valve_plate_scale_std: float
+    rest_scale_std: float
+    _var: float
+    _pos: np.ndarray
+    _neg: np.ndarray
+
+    @property
+    def fit(self) -> Baseline:
+        """Return the commissioning's baseline so far (defined by the monitor)."""
+        raise NotImplementedError
+
+    def _set_signatures(self) -> None:
+        raise NotImplementedError
+
+    def _open(self, sign: float) -> None:
+        raise NotImplementedError
+
+    def _publish_fit(self) -> None:
+        raise NotImplementedError
+
+    def state_dict(self) -> dict[str, object]:
+        """
+        Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
+
+        The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
+        and the isolation's sums; not the open window (a fraction of a second).
+
+        Returns
+        -------
+        dict
+            ``version`` and the learnt state; `load_state_dict` restores it exactly.
+
+        """
+        return {'version': self.STATE_VERSION, 'samples': self.samples,
+                'windows': self.windows, 'commissioning': self.commissioning.state(),
+                'baseline_complete': self.baseline is not None,
+                'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
+                'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
+                'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
+                'isolation': self.isolation.state()}
+
+    def load_state_dict(self, state: dict[str, object]) -> None:
+        """
+        Restore what `state_dict` returned.
+
+        Parameters
+        ----------
+        state : dict
+            A `state_dict` result (e.g. read back from the node's baseline file).
+
+        Raises
+        ------
+        ValueError
+            A state of another version, or missing or malformed entries (the monitor is
+            then left as it was).
+
+        """
+        if not isinstance(state, dict) or state.get('version') != self.STATE_VERSION:
+            version = state.get('version') if isinstance(state, dict) else None
+            raise ValueError(f'monitor state version {version!r}, expected '
+                             f'{self.STATE_VERSION}')
+        saved = self.state_dict()
+        try:
+            self._load(state)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            self._load(saved)
+            raise ValueError(f'malformed monitor state: {exc}') from None
+
+    def _load(self, state: dict[str, object]) -> None:
+        self.commissioning.load(state['commissioning'])  # type: ignore[arg-type]
+        self.isolation.load(state['isolation'])  # type: ignore[arg-type]
+        self.samples = int(state['samples'])  # type: ignore[call-overload]
+        self.windows = int(state['windows'])  # type: ignore[call-overload]
+        self.baseline = self.fit if state['baseline_complete'] else None
+        ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
+            'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
+        pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)
+        neg = np.asarray(state['cusum_neg_nm_s'], dtype=float)
+        if pos.shape != (len(CAUSES),) or neg.shape != pos.shape or not (
+                np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
+                and math.isfinite(ewma) and math.isfinite(var)):
+            raise ValueError('monitor sums of the wrong shape or not finite')
+        self._set_signatures()
+        self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
+        self._pos, self._neg = pos, neg
+        self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
+        level = int(state['level'])  # type: ignore[call-overload]
+        if level not in (OK, WARN, ERROR):
+            raise ValueError(f'monitor level {level}')
+        self.level = level
+        self._open(0.0)
+        if self.baseline is None:
+            self._publish_fit()
+        else:
+            self.theta_vp, self.valve_plate_scale_std, self.theta_rest, \
+                self.rest_scale_std = self.isolation.scales(self.baseline)
