@@ -15,10 +15,10 @@
 """
 One BLAS thread for the node and the command line, unless the user chose otherwise.
 
-The package's matrices are 5 x 5 and 6 x 5 (the wear monitor's baseline and isolation).
+The package's matrices are 6 x 6 (the wear monitor's baseline and isolation).
 OpenBLAS, which numpy's wheels bundle and Ubuntu's numpy links, starts a thread per core
 at the first call and keeps the others busy-waiting after every call: measured here, any
-call on a 5 x 5 matrix costs twice its time in CPU, the second core spinning. Next to an
+call on a 5 x 5 matrix cost twice its time in CPU, the second core spinning. Next to an
 EHA controller that is a core taken from the controller; in a replay it is the reader
 process's core (the replay of the wear bag went from 1.55x to 1.87x the rosbags loop with
 one thread). The entry layers (``node``, ``app``) call `limit_blas_threads` before

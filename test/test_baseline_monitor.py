@@ -194,6 +194,9 @@ def test_spd_inverse_inverts_and_refuses_a_matrix_that_is_not_positive_definite(
         spd_inverse(np.array([[1.0, 2.0], [2.0, 1.0]]))  # eigenvalues 3 and -1
 
 
+TOLERANCE = 0.5 * EstimatorConfig().cusum_drift_nm  # the monitor's: half the allowance
+
+
 def _settling_commissioning(settle_s, tau_s=600.0, wall_per_window_s=2.5, total_nm=0.3):
     """
     Commission on a pump whose valve-plate friction falls as exp(-t / tau) (oil warming).
@@ -201,7 +204,7 @@ def _settling_commissioning(settle_s, tau_s=600.0, wall_per_window_s=2.5, total_
     Returns the drift still to come when the baseline completes, at a typical point [N m].
     """
     rng = np.random.default_rng(11)
-    com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, 0.025, settle_s)
+    com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, TOLERANCE, settle_s)
     vp, other, th_s, sign, a_s = operating_points(rng, 4000)
     typical = float(np.mean(vp))
     for k in range(vp.size):
@@ -216,9 +219,9 @@ def _settling_commissioning(settle_s, tau_s=600.0, wall_per_window_s=2.5, total_
 
 def test_commissioning_waits_until_a_settling_pump_has_little_drift_left():
     # the drift between the halves alone: completes while more of the warm-up is still to
-    # come than the CUSUM allowance (0.05 N m): an alarm after commissioning
-    assert _settling_commissioning(settle_s=0.0, tau_s=600.0) > 0.05
-    # extrapolated over the slowest settling: about the tolerance (0.025 N m) to come
+    # come than the CUSUM allowance (0.025 N m): an alarm after commissioning
+    assert _settling_commissioning(settle_s=0.0, tau_s=600.0) > EstimatorConfig().cusum_drift_nm
+    # extrapolated over the slowest settling: about the allowance at most to come
     for tau_s in (150.0, 300.0, 600.0, 900.0):
         left = _settling_commissioning(settle_s=900.0, tau_s=tau_s)
         assert 0.0 < left < 0.03, (tau_s, left)
@@ -228,7 +231,7 @@ def test_a_steady_pump_completes_its_commissioning_at_once_or_nearly():
     restarts = []
     for seed in range(20):
         rng = np.random.default_rng(seed)
-        com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, 0.025, 900.0)
+        com = Commissioning((0.5, 0.5, 0.3, 0.3, 0.1, 2e-4), 30.0, TOLERANCE, 900.0)
         vp, other, th_s, sign, a_s = operating_points(rng, 4000)
         for k in range(vp.size):
             h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])

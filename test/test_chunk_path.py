@@ -306,16 +306,17 @@ def test_monitor_update_many_equals_update():
     dt = np.where(rng.random(n) < 0.01, 0.0, 1e-3).tolist()  # gaps restart the windows
     sign = np.where(np.arange(n) % 1500 < 700, 1.0, -1.0).tolist()  # reversals
     vp, other, theoretical = (rng.uniform(0.1, 2.0, n).tolist() for _ in range(3))
+    accel = rng.uniform(-800.0, 800.0, n).tolist()  # the baseline's inertia regressor
     residual = (rng.normal(0.0, 0.1, n)  # above the baseline after 5 s
                 + np.where(np.arange(n) > 5000, 2.5, 0.0)).tolist()
     one, many = (WearMonitor(settings_view(config, MonitorSettings),
                              settings_view(config, AttributionSettings)) for _ in range(2))
     expected = []
-    for row in zip(t, dt, residual, vp, other, theoretical, sign, strict=True):
+    for row in zip(t, dt, residual, vp, other, theoretical, sign, accel, strict=True):
         one.update(*row)
         expected.append((one.level, one.cusum_pos_nm_s, one.cusum_neg_nm_s, one.theta_vp,
                          one.theta_rest, one.valve_plate_scale_std, one.rest_scale_std))
-    columns = (t, dt, residual, vp, other, theoretical, sign)
+    columns = (t, dt, residual, vp, other, theoretical, sign, accel)
     traces = [many.update_many(*(c[a:b] for c in columns))
               for a, b in ((0, 1), (1, 2500), (2500, n))]
     got = [row for trace in traces for row in zip(*trace, strict=True)]

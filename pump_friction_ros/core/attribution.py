@@ -104,7 +104,7 @@ class AttributionSettings:
 
 
 def signature_matrix(baseline: Baseline, drive_loss_nm: float,
-                     rotor_inertia_kg_m2: float = 0.0) -> np.ndarray:
+                     rotor_inertia_kg_m2: float) -> np.ndarray:
     """
     Return M such that the causes' signatures over a window are s = M h (`CAUSES` order).
 

@@ -107,7 +107,8 @@ class WearMonitor(MonitorPersistence):
     Parameters
     ----------
     config : MonitorSettings
-        Tuning of the detection: ``ewma_*``, ``cusum_*`` and ``baseline_learn_s``.
+        Tuning of the detection: ``ewma_*``, ``cusum_*``, ``baseline_learn_s`` and
+        ``baseline_settle_time_constant_s``.
     attribution : AttributionSettings
         Tuning of the baseline fit and the isolation.
     drive_loss_nm : float
