@@ -68,6 +68,22 @@ def p_loop(time_constants_s=(0.02, 0.05, 0.1)):
     return np.array(speed), np.array(accel)
 
 
+def feed_modelled_pump(est, table, config, speed, accel):
+    """Feed the exact torque of the modelled pump (J = `J`) at 120 bar; return the estimates."""
+    out = []
+    dp = 120e5
+    nu = config.viscosity_m2_s(46e-6)
+    for k, (w, a) in enumerate(zip(speed.tolist(), accel.tolist(), strict=True)):
+        mags, _ = table.magnitudes(abs(w), dp, nu, w * dp < 0.0)
+        direction = smooth_sign_scalar(w, table.zero_speed_threshold_rad_s)
+        torque = input_torque_nm(theoretical_torque_nm(table.displacement_m3, dp), sum(mags),
+                                 direction, config.drive_loss_torque_nm) + J * a
+        stamp = (k + 1) * DT_NS
+        est.on_input(K.LOAD_PRESSURE, stamp, dp)
+        out.append(est.on_input(K.JOINT_STATE, stamp, w, torque))
+    return out
+
+
 def monitored_residuals(table, speed, accel, config):
     """Feed the exact torque of the modelled pump; return (residual, |a|) of monitored samples."""
     est = TorqueEstimator(config, table, 46e-6)
@@ -82,18 +98,9 @@ def monitored_residuals(table, speed, accel, config):
         return update(t_s, dt_s, residual_nm, *rest)
 
     est.monitor.update = record
-    raw = []
-    dp = 120e5
-    nu = config.viscosity_m2_s(46e-6)
-    for k, (w, a) in enumerate(zip(speed.tolist(), accel.tolist(), strict=True)):
-        mags, _ = table.magnitudes(abs(w), dp, nu, w * dp < 0.0)
-        direction = smooth_sign_scalar(w, table.zero_speed_threshold_rad_s)
-        torque = input_torque_nm(theoretical_torque_nm(table.displacement_m3, dp), sum(mags),
-                                 direction, config.drive_loss_torque_nm) + J * a
-        stamp = (k + 1) * DT_NS
-        est.on_input(K.LOAD_PRESSURE, stamp, dp)
-        e = est.on_input(K.JOINT_STATE, stamp, w, torque)
-        raw.append(e.residual_nm * math.copysign(1.0, w))
+    estimates = feed_modelled_pump(est, table, config, speed, accel)
+    raw = [e.residual_nm * math.copysign(1.0, w)
+           for e, w in zip(estimates, speed.tolist(), strict=True)]
     at = np.array([round(t * 1e9 / DT_NS) - 1 for t in stamps])
     return np.array(got), np.abs(accel[at]), np.array(raw)[at]
 
@@ -132,15 +139,7 @@ def test_the_baseline_learns_a_misconfigured_rotor_inertia(table):
     config = EstimatorConfig(rotor_inertia_kg_m2=0.8 * J, drive_loss_torque_nm=0.03,
                              baseline_learn_s=4.0)
     est = TorqueEstimator(config, table, 46e-6)
-    dp = 120e5
-    nu = config.viscosity_m2_s(46e-6)
-    for k, (w, a) in enumerate(zip(speed.tolist(), accel.tolist(), strict=True)):
-        mags, _ = table.magnitudes(abs(w), dp, nu, w * dp < 0.0)
-        direction = smooth_sign_scalar(w, table.zero_speed_threshold_rad_s)
-        torque = input_torque_nm(theoretical_torque_nm(table.displacement_m3, dp), sum(mags),
-                                 direction, config.drive_loss_torque_nm) + J * a
-        est.on_input(K.LOAD_PRESSURE, (k + 1) * DT_NS, dp)
-        est.on_input(K.JOINT_STATE, (k + 1) * DT_NS, w, torque)
+    feed_modelled_pump(est, table, config, speed, accel)
     baseline = est.monitor.baseline
     assert baseline is not None
     learnt, std = baseline.coefficients[5], baseline.std()[5]
