@@ -439,6 +439,40 @@ def test_ctrl_c_during_a_replay_leaves_nothing(env, tmp_path, long_bag):
     assert not res.exists()  # no output, no staging folder, no folder made for them
 
 
+SECOND_CTRL_C = '''
+import os, signal, sys
+from pump_friction_ros.app import cli, data_commands
+
+
+class CtrlCWhileReporting:
+    """stderr that receives another Ctrl-C while the first one is being reported."""
+
+    def write(self, text):
+        os.kill(os.getpid(), signal.SIGINT)
+        return sys.__stderr__.write(text)
+
+    def flush(self):
+        sys.__stderr__.flush()
+
+
+def interrupted(args):
+    sys.stderr = CtrlCWhileReporting()
+    raise KeyboardInterrupt
+
+
+data_commands.cmd_evaluate_monitor = interrupted
+sys.exit(cli.main(['evaluate-monitor', '--quick']))
+'''
+
+
+def test_a_second_ctrl_c_while_reporting_the_first_still_exits_130_with_one_line(env):
+    # a Ctrl-C pending when the first is caught (a second keypress, or one noted during the
+    # clean-up) was raised in the report: the process died of SIGINT (-2), not exit 130
+    proc = subprocess.run([sys.executable, '-c', SECOND_CTRL_C], capture_output=True,
+                          text=True, timeout=60, env=env, check=False)
+    assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
+
+
 @pytest.mark.parametrize('group', [True, False])
 def test_ctrl_c_during_a_fleet_leaves_nothing(env, tmp_path, long_bag, group):
     import shutil

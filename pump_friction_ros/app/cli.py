@@ -22,6 +22,7 @@ import json
 import math
 import os
 from pathlib import Path
+import signal
 import sys
 from typing import Any, NoReturn, TYPE_CHECKING
 
@@ -472,11 +473,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # e.g. piped into head
         return 0
     except KeyboardInterrupt:  # every output is staged: discarded on the way up
-        print('pump_friction: interrupted', file=sys.stderr)
-        return 130
+        return _interrupted()
     except OSError as exc:  # the environment (disk full, permissions) rather than the input
         where = f': {exc.filename}' if exc.filename else ''
         return _fail(f'{exc.strerror or type(exc).__name__}{where}')
+
+
+def _interrupted() -> int:
+    """
+    Report a Ctrl-C in one line and return exit code 130, whatever Ctrl-C follows.
+
+    A second Ctrl-C (a terminal's impatient user, or one noted during the clean-up and
+    handed on) may still be pending when the first is caught: Python raises it at the next
+    bytecode, here or on the way out of ``main``. So Ctrl-C is ignored first, a pending one
+    raised meanwhile only retries that, and the line is printed once.
+    """
+    while True:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            break
+        except KeyboardInterrupt:
+            continue
+    print('pump_friction: interrupted', file=sys.stderr)
+    return 130
 
 
 def _fail(message: str) -> int:
