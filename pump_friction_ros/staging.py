@@ -38,7 +38,7 @@ import threading
 from .errors import OutputError
 
 __all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
-           'looks_like_plots', 'remove_empty_folders', 'sigint_held']
+           'looks_like_plots', 'remove_empty_folders', 'sigint_held', 'sigint_ignored']
 
 
 @contextmanager
@@ -67,6 +67,23 @@ def sigint_held() -> Iterator[None]:
             signal.signal(signal.SIGINT, previous)
             if noted and callable(previous):
                 previous(signal.SIGINT, None)  # e.g. raises KeyboardInterrupt now
+
+
+def sigint_ignored() -> None:
+    """
+    Ignore Ctrl-C from now on, in a process on its way out after the first one.
+
+    A second Ctrl-C (an impatient user, or one noted during the clean-up and handed on)
+    may be pending when the first is caught: Python raises it at the next bytecode, in
+    the report or on the way out of ``main``, and the process dies of SIGINT instead of
+    exiting 130. Setting the handler runs a pending one first: that only retries.
+    """
+    while True:
+        try:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            return
+        except KeyboardInterrupt:
+            continue
 
 
 def looks_like_bag(path: Path) -> bool:

@@ -22,7 +22,6 @@ import json
 import math
 import os
 from pathlib import Path
-import signal
 import sys
 from typing import Any, NoReturn, TYPE_CHECKING
 
@@ -40,6 +39,7 @@ from ..physics.units import (
     MM_TO_M,
     rpm_to_rad_s,
 )
+from ..staging import sigint_ignored
 
 if TYPE_CHECKING:
     from ..table.friction_table import FrictionTable
@@ -480,20 +480,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _interrupted() -> int:
-    """
-    Report a Ctrl-C in one line and return exit code 130, whatever Ctrl-C follows.
-
-    A second Ctrl-C (a terminal's impatient user, or one noted during the clean-up and
-    handed on) may still be pending when the first is caught: Python raises it at the next
-    bytecode, here or on the way out of ``main``. So Ctrl-C is ignored first, a pending one
-    raised meanwhile only retries that, and the line is printed once.
-    """
-    while True:
-        try:
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-            break
-        except KeyboardInterrupt:
-            continue
+    """Report a Ctrl-C in one line and return exit code 130 (`staging.sigint_ignored`)."""
+    sigint_ignored()  # a Ctrl-C still pending must not kill us while we report the first
     print('pump_friction: interrupted', file=sys.stderr)
     return 130
 
