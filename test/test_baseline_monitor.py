@@ -158,6 +158,69 @@ def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which():
     verdict, words = mon.verdict(1.0)
     assert verdict == Verdict.CANNOT_TELL
     assert 'valve plate' in words and 'other friction' in words and 'on this duty cycle' in words
+    # either could have changed: each interval holds its truth (x1.8 and x1), and the
+    # valve plate's holds 1 as well (the change might be the other friction's)
+    low, high = (mon.theta_vp + z * 1.96 * mon.valve_plate_scale_std for z in (-1, 1))
+    assert low <= 1.0 and 1.8 <= high, (low, high)
+    assert abs(mon.theta_rest - 1.0) <= 1.96 * mon.rest_scale_std
+
+
+def test_the_interval_without_a_change_spans_the_changes_the_cusum_does_not_see():
+    mon = monitor(cusum_drift_nm=0.06)  # an allowance that hides more than the floor
+    rng = np.random.default_rng(12)
+    t = run(mon, rng, 240, TRUTH, noise=0.002)  # commissioning
+    assert not mon.learning
+    unseen = mon.undetectable_change['valve_plate']
+    assert unseen > 1.96 * EstimatorConfig().scale_systematic_std
+    assert mon.theta_vp == 1.0
+    assert mon.valve_plate_scale_std == pytest.approx(unseen / 1.959964, rel=1e-6)
+    # a smaller change never sums; the reported interval holds it all the same, window
+    # after window; a change half as large again is detected, and the interval holds it
+    # before the alarm (from no change to its estimate) and after (named), from the
+    # moment its first windows have shown it (a few: some points' margins absorb it)
+    levels = set()
+    for size in (0.7 * unseen, 1.5 * unseen):
+        for k in range(1200):
+            t = run(mon, rng, 1, TRUTH, change=_changed('valve_plate', size), noise=0.002,
+                    t0=t)
+            assert k < 8 or abs(mon.theta_vp - (1.0 + size)) <= 1.96 * \
+                mon.valve_plate_scale_std, (size, k)
+            levels.add((size, mon.level, mon.cusum_pos_nm_s > 0.0))
+    assert {lv for size, lv, _ in levels if size < unseen} == {OK}  # never sums to WARN
+    assert (1.5 * unseen, OK, True) in levels  # summing, not yet confirmed
+    assert mon.level >= WARN and mon.verdict(1.0)[0] == Verdict.VALVE_PLATE
+    assert 1.96 * mon.valve_plate_scale_std < 0.6 * unseen  # named: narrower
+
+
+def test_a_baseline_file_from_before_the_line_fit_loads_and_goes_on():
+    mon = monitor()
+    rng = np.random.default_rng(14)
+    t = run(mon, rng, 240, TRUTH)
+    t = run(mon, rng, 120, TRUTH, change=_changed('valve_plate', 0.8), t0=t)
+    state = mon.state_dict()
+    for key in ('g1', 'g2', 'b1'):  # the isolation's sums as release 3 of the state wrote them
+        del state['isolation'][key]
+    old = monitor()
+    old.load_state_dict(state)
+    assert old.isolation.stats.trend(0) is None and old.level == mon.level >= WARN
+    run(old, rng, 120, TRUTH, change=_changed('valve_plate', 0.8), t0=t)
+    assert old.isolation.stats.trend(0) is not None
+    assert abs(old.theta_vp - 1.8) <= 1.96 * old.valve_plate_scale_std < 0.3
+
+
+def test_a_valve_plate_change_still_growing_is_reported_up_to_its_present_size():
+    mon = monitor()
+    rng = np.random.default_rng(13)
+    t = run(mon, rng, 240, TRUTH)  # commissioning
+    for k in range(800):  # wear growing steadily from x1 to x1.8 over 200 s of running
+        t = run(mon, rng, 1, TRUTH, change=_changed('valve_plate', 0.8 * (k + 1) / 800),
+                t0=t)
+    assert mon.verdict(1.0)[0] == Verdict.VALVE_PLATE
+    # the isolation's memory (120 s) still holds most of the ramp: its mean lags the
+    # present x1.8, and the interval reaches it by the line the change follows
+    delta, std = mon.isolation.evidence()[1:]
+    assert 1.0 + delta[0] + 1.96 * std[0] < 1.8 - 0.05
+    assert abs(mon.theta_vp - 1.8) <= 1.96 * mon.valve_plate_scale_std < 0.3
 
 
 def test_state_dict_round_trip_resumes_exactly():

@@ -66,6 +66,9 @@ CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torq
 """The single-cause explanations of a change, in signature order."""
 _VP, _OTHER = 0, 1
 _N = len(CAUSES)
+Z95 = 1.959963984540054
+"""Half-width of a 95 % normal interval in standard deviations: a reported scale's std is
+its interval's half-width over this."""
 MIN_LEVEL = 0.2
 """The uncertainty of a reported scale divides by the learnt friction level; a level below
 this times the model's is taken at it (a guard of the division, not a figure of the pump)."""
@@ -149,18 +152,57 @@ class _ChangeStats:
         self.c = 0.0
         self.count = 0.0  # windows, forgotten as the sums are
         self.windows = 0
+        # per cause, the same sums weighted by each window's age (monitored running since
+        # it) and its square: a change that moves along a line (`trend`)
+        self.g1 = np.zeros(_N)
+        self.g2 = np.zeros(_N)
+        self.b1 = np.zeros(_N)
 
-    def add(self, s: np.ndarray, d: float, w: float, keep: float) -> None:
+    def add(self, s: np.ndarray, d: float, w: float, keep: float, age_s: float) -> None:
+        # the older windows age by the new one's running: tau -> tau + age_s
+        g0 = np.diag(self.g)
+        self.g2 = keep * (self.g2 + 2.0 * age_s * self.g1 + age_s * age_s * g0)
+        self.g1 = keep * (self.g1 + age_s * g0)
+        self.b1 = keep * (self.b1 + age_s * self.b)
         self.g = keep * self.g + w * np.outer(s, s)
         self.b = keep * self.b + w * d * s
         self.c = keep * self.c + w * d * d
         self.count = keep * self.count + 1.0
         self.windows += 1
 
+    def trend(self, j: int) -> tuple[float, float, float] | None:
+        """
+        Fit cause j's change as a line in time, delta(tau) = now + slope tau.
+
+        Returns
+        -------
+        tuple of float or None
+            The change now, its variance and the slope's z score (noise units, scaled
+            by the line's own lack of fit; the slope is against the age tau, so negative:
+            rising); None where the windows cannot fit a line.
+
+        """
+        g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+        det = g0 * g2 - g1 * g1
+        dof = self.count - 2.0
+        if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
+            return None
+        b0, b1 = float(self.b[j]), float(self.b1[j])
+        now = (g2 * b0 - g1 * b1) / det
+        slope = (g0 * b1 - g1 * b0) / det
+        inflation = max(1.0, (self.c - now * b0 - slope * b1) / dof)
+        return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
+
     def lack_of_fit(self, t_best: float) -> float:
         """Return the residual variance about the best single cause, in noise units (>= 1)."""
         dof = self.count - 1.0
         return max(1.0, (self.c - t_best) / dof) if dof >= 1.0 else 1.0
+
+
+def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
+    """Return the 95 % interval of a relative change, the level's uncertainty added."""
+    half = Z95 * math.sqrt(var + (change * level_rel_std) ** 2)
+    return change - half, change + half
 
 
 class FaultIsolation:
@@ -210,7 +252,8 @@ class FaultIsolation:
         if not changing:
             self.stats.clear()
             return
-        self.stats.add(s, d_nm, weight, math.exp(-duration_s / self.settings.isolation_memory_s))
+        self.stats.add(s, d_nm, weight, math.exp(-duration_s / self.settings.isolation_memory_s),
+                       duration_s)
 
     def evidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -235,6 +278,23 @@ class FaultIsolation:
         delta = np.where(ok, stats.b / safe, math.nan)
         std = np.where(ok, np.sqrt(inflation / safe), math.nan)
         return t / inflation, delta, std
+
+    def moving(self, j: int) -> tuple[float, float, float] | None:
+        """
+        Return cause j's change as it is now where it still moves, else None.
+
+        Moving: the slope of a line through the change over the memory
+        (`_ChangeStats.trend`) is significant at ``attribution_z``.
+
+        Returns
+        -------
+        tuple of float or None
+            The change now, its variance, the slope's z score (negative: rising) [-].
+
+        """
+        line = self.stats.trend(j)
+        z = self.settings.attribution_z
+        return line if line is not None and line[2] * line[2] >= z * z else None
 
     def verdict(self) -> tuple[str, str, int]:
         """
@@ -271,30 +331,55 @@ class FaultIsolation:
             return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[j]]} or {_WORDS[CAUSES[k]]}: not '
                     f'yet told apart (evidence {t[j]:.0f} against {t[k]:.0f})', -1)
         name = _WORDS[CAUSES[j]]
+        scale = f'scale {1.0 + delta[j]:.2f} of healthy'
+        line = self.moving(j)
+        if line is not None:
+            scale += f', {1.0 + line[0]:.2f} now and {"rising" if line[2] < 0.0 else "falling"}'
         if j == _VP:
-            name = f'valve plate (scale {1.0 + delta[j]:.2f} of healthy)'
+            name = f'valve plate ({scale})'
             if self.viscosity_assumed:
                 name = ('valve plate or oil viscosity (the viscosity is a parameter: no '
-                        f'temperature topic) (scale {1.0 + delta[j]:.2f} of healthy)')
+                        f'temperature topic) ({scale})')
         elif j == _OTHER:
-            name = f'not the valve plate: other friction (scale {1.0 + delta[j]:.2f})'
+            name = f'not the valve plate: other friction ({scale})'
         else:
             name = f'not friction: {name} {delta[j]:+.3g}' + (
                 ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else '')
         return _CLASS[j], name, j
 
-    def scales(self, baseline: Baseline) -> tuple[float, float, float, float]:
+    def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool
+               ) -> tuple[float, float, float, float]:
         """
         Return the valve-plate and other friction scales relative to healthy, with stds.
 
-        Under the cause the verdict names (or the friction terms tied in it): that cause's
-        change; a scale of a cause not named is 1 (no change) with the std its own fit
-        would have.
+        Each is the middle of the changes the data do not rule out, its std the half-width
+        of that span over 1.96 (the span is the 95 % interval):
+
+        * the cause the verdict names, once the change is confirmed (WARN or ERROR): its
+          change +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
+          level, the floor ``scale_systematic_std``); where the change still moves (the
+          slope of a line through it over the memory is significant at ``attribution_z``)
+          the span reaches the line's present value too: a wear still growing is larger
+          now than the memory's mean;
+        * another cause named: no change, +- 1.96 times the std its own fit would have;
+        * two causes that cannot be told apart: from no change to this cause's estimate;
+        * a change not confirmed yet (level OK) or that no single cause stands out in:
+          from no change to this cause's estimate, and any change the detection does not
+          see (``undetectable``: a change that the CUSUM allowance and the baseline's
+          margin absorb);
+        * no change under way (every CUSUM at zero): any change the detection does not see.
+          A fault below it is there, unseen: a scale of 1 +- the floor alone would claim
+          that it is not.
 
         Parameters
         ----------
         baseline : Baseline
             The healthy signature (the uncertainty of its friction levels).
+        undetectable : ndarray
+            Per cause (`CAUSES` order), the largest relative change the detection does not
+            see on this duty cycle [-] (``WearMonitor.undetectable_change``).
+        confirmed : bool
+            The monitor is at WARN or ERROR.
 
         Returns
         -------
@@ -303,28 +388,43 @@ class FaultIsolation:
 
         """
         floor = self.settings.scale_systematic_std
+        out: list[float] = []
         if not self.stats.windows:
-            return 1.0, floor, 1.0, floor
+            for i in (_VP, _OTHER):
+                out += [1.0, max(floor, float(undetectable[i]) / Z95)]
+            return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
-        t, delta, std = self.evidence()
+        _, delta, std = self.evidence()
         level_std = baseline.std()
         coef = baseline.coefficients
-        out: list[float] = []
         for i in (_VP, _OTHER):
             noise = float(std[i]) if std[i] == std[i] else 1.0
-            shown = named == i or (verdict == Verdict.CANNOT_TELL and (
-                int(np.nanargmax(np.nan_to_num(t, nan=-1.0))) == i))
-            change = float(delta[i]) if shown and delta[i] == delta[i] else 0.0
-            level = max(1.0 + float(coef[i]), MIN_LEVEL)
-            var = noise * noise + floor * floor + (change * float(level_std[i]) / level) ** 2
-            out += [1.0 + change, math.sqrt(var)]
+            if confirmed and named >= 0 and named != i:  # another cause explains it
+                out += [1.0, math.hypot(noise, floor)]
+                continue
+            # the baseline's uncertainty of the friction level, relative to it
+            level = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
+            change = float(delta[i]) if delta[i] == delta[i] else 0.0
+            low, high = _interval(change, noise * noise + floor * floor, level)
+            if confirmed and named == i:
+                line = self.moving(i)
+                if line is not None:
+                    now_low, now_high = _interval(line[0], line[1] + floor * floor, level)
+                    low, high = min(low, now_low), max(high, now_high)
+            elif confirmed and verdict == Verdict.CANNOT_TELL:
+                low, high = min(0.0, low), max(0.0, high)
+            else:
+                unseen = float(undetectable[i])
+                low, high = min(0.0, low, -unseen), max(0.0, high, unseen)
+            out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95]
         return out[0], out[1], out[2], out[3]
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values."""
         st = self.stats
         return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
-                'windows': st.windows}
+                'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
+                'b1': st.b1.tolist()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -343,6 +443,10 @@ class FaultIsolation:
         """
         (g, b), (c, count) = read_sums(state, {'g': (_N, _N), 'b': (_N,)}, ('c', 'count'),
                                        'isolation')
+        # the age-weighted sums came later (a file without them: from the next window on)
+        (g1, g2, b1), _ = read_sums(state, {'g1': (_N,), 'g2': (_N,), 'b1': (_N,)}, (),
+                                    'isolation') if 'g1' in state else ([np.zeros(_N)] * 3, [])
         st = self.stats
         st.g, st.b, st.c, st.count = g, b, c, count
+        st.g1, st.g2, st.b1 = g1, g2, b1
         st.windows = int(state['windows'])  # type: ignore[call-overload]

@@ -179,6 +179,26 @@ class WearMonitor(MonitorPersistence):
         return math.sqrt(self._var)
 
     @property
+    def undetectable_change(self) -> dict[str, float]:
+        """
+        Return, per cause, the largest relative change the detection does not see.
+
+        A change delta of cause j moves its CUSUM's input by about delta times the RMS of
+        its signature over commissioning's points, less the margin taken off the change
+        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std):
+        below the allowance k it never sums. A reported scale holds it in its interval
+        while no change is under way. Zero before the baseline is learnt.
+
+        Returns
+        -------
+        dict
+            Cause (`attribution.CAUSES`) -> relative change [-] (torque offset and drive
+            loss: [N m]).
+
+        """
+        return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
+
+    @property
     def learning(self) -> bool:
         """Whether the healthy baseline is still being learnt (no alarm meanwhile)."""
         return self.baseline is None
@@ -377,7 +397,7 @@ class WearMonitor(MonitorPersistence):
                 self.alarm_onset_s = math.nan
             self.level = level
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
-            self.isolation.scales(baseline)
+            self.isolation.scales(baseline, self._undetectable, self.level != OK)
 
     @property
     def learner(self) -> BaselineLearner:
@@ -403,17 +423,23 @@ class WearMonitor(MonitorPersistence):
         if self.baseline is None:
             self._m = np.zeros((len(CAUSES), N_TERMS))
             self._norm = np.ones(len(CAUSES))
+            self._undetectable = np.zeros(len(CAUSES))
             return
         self._m = signature_matrix(self.baseline, self._drive_loss, self._inertia)
-        second = self._m @ self.learner.a @ self._m.T / max(self.learner.weight, 1e-300)
+        weight = max(self.learner.weight, 1e-300)
+        second = self._m @ self.learner.a @ self._m.T / weight
         self._norm = np.sqrt(np.maximum(np.diag(second), 1e-12))
+        # the change the CUSUMs do not see (`undetectable_change`)
+        prediction_std = math.sqrt(max(float(np.trace(self.baseline.covariance
+                                                      @ self.learner.a)) / weight, 0.0))
+        self._undetectable = (self._k + self._sigmas * prediction_std) / self._norm
 
     def _publish_fit(self) -> None:
-        """Publish the scales: the fit against the model while learning, 1 once learnt."""
+        """Publish the scales: the fit against the model while learning, then the change."""
         floor = self._floor
-        if self.baseline is not None:
-            self.theta_vp = self.theta_rest = 1.0
-            self.valve_plate_scale_std = self.rest_scale_std = floor
+        if self.baseline is not None:  # the change from it (none under way: 1 +- unseen)
+            self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
+                self.isolation.scales(self.baseline, self._undetectable, self.level != OK)
             return
         coef, std = self.fit.coefficients, self.fit.std()
         self.theta_vp = 1.0 + float(coef[0])

@@ -150,8 +150,4 @@ class MonitorPersistence:
             raise ValueError(f'monitor level {level}')
         self.level = level
         self._open(0.0)
-        if self.baseline is None:
-            self._publish_fit()
-        else:
-            self.theta_vp, self.valve_plate_scale_std, self.theta_rest, \
-                self.rest_scale_std = self.isolation.scales(self.baseline)
+        self._publish_fit()
