@@ -132,6 +132,9 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('valve_plate_scale_std', mon.valve_plate_scale_std),
         ('other_friction_scale', mon.theta_rest),
         ('other_friction_scale_std', mon.rest_scale_std),
+        # a change up to this scale goes unseen on this duty cycle (1: not yet learnt)
+        ('valve_plate_undetectable_scale', 1.0 + mon.undetectable_change['valve_plate']),
+        ('other_friction_undetectable_scale', 1.0 + mon.undetectable_change['other_friction']),
         ('baseline_learnt_s', mon.learner.learnt_s),
         ('baseline_learn_s', mon.settings.baseline_learn_s),
         ('baseline_complete', int(not mon.learning)),
