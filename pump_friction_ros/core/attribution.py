@@ -48,6 +48,10 @@ topic the model follows the viscosity and it does not.
 The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standard
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 ``scale_systematic_std``: systematic model error does not average away with more windows.
+The reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
+still moving (a line through it over the memory, `FaultIsolation.moving`) up to its present
+value, and, until one cause is confirmed, no change as well as the change that the
+detection does not see.
 """
 
 from __future__ import annotations
@@ -352,8 +356,7 @@ class FaultIsolation:
         """
         Return the valve-plate and other friction scales relative to healthy, with stds.
 
-        Each is the middle of the changes the data do not rule out, its std the half-width
-        of that span over 1.96 (the span is the 95 % interval):
+        Each interval (scale +- 1.96 std, 95 %) spans the changes the data do not rule out:
 
         * the cause the verdict names, once the change is confirmed (WARN or ERROR): its
           change +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
@@ -363,13 +366,13 @@ class FaultIsolation:
           now than the memory's mean;
         * another cause named: no change, +- 1.96 times the std its own fit would have;
         * two causes that cannot be told apart: from no change to this cause's estimate;
-        * a change not confirmed yet (level OK) or that no single cause stands out in:
-          from no change to this cause's estimate, and any change the detection does not
-          see (``undetectable``: a change that the CUSUM allowance and the baseline's
-          margin absorb);
-        * no change under way (every CUSUM at zero): any change the detection does not see.
-          A fault below it is there, unseen: a scale of 1 +- the floor alone would claim
-          that it is not.
+        * a change not confirmed yet (level OK) or that no single cause stands out in: 1
+          (no change confirmed), the interval reaching this cause's estimate and any
+          change the detection does not see (``undetectable``: a change that the CUSUM
+          allowance and the baseline's margin absorb);
+        * no change under way (every CUSUM at zero): 1, the interval spanning any change
+          the detection does not see. A fault below it is there, unseen: a scale of 1 +-
+          the floor alone would claim that it is not.
 
         Parameters
         ----------
@@ -413,9 +416,9 @@ class FaultIsolation:
                     low, high = min(low, now_low), max(high, now_high)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
                 low, high = min(0.0, low), max(0.0, high)
-            else:
-                unseen = float(undetectable[i])
-                low, high = min(0.0, low, -unseen), max(0.0, high, unseen)
+            else:  # no change confirmed: 1, +- whatever might be there
+                half = max(-low, high, float(undetectable[i]))
+                low, high = -half, half
             out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95]
         return out[0], out[1], out[2], out[3]
 
