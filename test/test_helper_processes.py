@@ -135,26 +135,27 @@ def refuse_output_while_the_reader_is_blocked(bag, out, conn):
         return source
 
     replay.open_source = open_and_wait
-    started = time.monotonic()
     try:
         replay_bag(bag, CONFIG, out_bag=out)
         error = ''
     except (BagError, OutputError) as exc:
         error = str(exc)
-    conn.send((error, blocked, ended, time.monotonic() - started,
-               [p.pid for p in multiprocessing.active_children()]))
+    conn.send((error, blocked, ended, [p.pid for p in multiprocessing.active_children()]))
 
 
 def test_refused_output_with_the_reader_blocked_on_a_full_pipe_ends(tmp_path, bags):
     out = tmp_path / 'out'
     out.mkdir()  # exists: the replay refuses it after opening the bag
-    error, blocked, ended, elapsed, children = run_bounded(
+    error, blocked, ended, children = run_bounded(
         refuse_output_while_the_reader_is_blocked, str(bags[0]), str(out))
     assert 'output exists' in error
     assert blocked == [True]  # the reader was blocked in send() when the replay refused
-    assert ended == [(0, 0.0)]  # it ended by itself when its pipe closed: no terminate, kill
+    # it ended by itself when its pipe closed, within the first join's timeout: not by the
+    # terminate or the kill after it (the whole replay's time, table building included,
+    # says nothing of that on a loaded machine)
+    assert [code for code, _ in ended] == [0]
+    assert all(wait_s < sources.JOIN_TIMEOUT_S for _, wait_s in ended), ended
     assert children == []
-    assert elapsed < sources.JOIN_TIMEOUT_S
 
 
 def terminate_a_reader(bag, conn):
