@@ -406,13 +406,13 @@ class FaultIsolation:
                 out += [1.0, math.hypot(noise, floor)]
                 continue
             # the baseline's uncertainty of the friction level, relative to it
-            level = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
+            level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
             change = float(delta[i]) if delta[i] == delta[i] else 0.0
-            low, high = _interval(change, noise * noise + floor * floor, level)
+            low, high = _interval(change, noise * noise + floor * floor, level_rel_std)
             if confirmed and named == i:
                 line = self.moving(i)
                 if line is not None:
-                    now_low, now_high = _interval(line[0], line[1] + floor * floor, level)
+                    now_low, now_high = _interval(line[0], line[1] + floor * floor, level_rel_std)
                     low, high = min(low, now_low), max(high, now_high)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
                 low, high = min(0.0, low), max(0.0, high)
