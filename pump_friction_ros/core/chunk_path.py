@@ -450,4 +450,4 @@ def _monitor(core: TorqueEstimator, released: Released,
     return core.monitor.update_many((stamps * 1e-9).tolist(), gaps.tolist(),
                                     ((filtered - inertia) * sign).tolist(), vp.tolist(),
                                     other.tolist(), theoretical.tolist(), sign.tolist(),
-                                    accel.tolist())
+                                    accel.tolist(), np.abs(speed).tolist())

@@ -66,6 +66,7 @@ from .node_parameters import (
     TorqueSource,
     ViscositySource,
 )
+from .oil_allowance import band_friction_nm, OilAllowance
 from .oil_range import coverage_warning, table_spec_for
 from .settled_residual import SettledResidual
 from .speed_filter import SpeedFilter
@@ -139,10 +140,15 @@ class TorqueEstimator:
         self._zero_speed = table.zero_speed_threshold_rad_s
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
+        assumed = not self._use_temperature
         self.monitor = WearMonitor(settings_view(config, MonitorSettings),
                                    settings_view(config, AttributionSettings),
-                                   config.drive_loss_torque_nm, not self._use_temperature,
-                                   config.rotor_inertia_kg_m2)
+                                   config.drive_loss_torque_nm, assumed,
+                                   config.rotor_inertia_kg_m2, OilAllowance(
+                                       *band_friction_nm(table, self._viscosity_m2_s,
+                                                         self._walther,
+                                                         config.oil_temperature_band_c))
+                                   if assumed else None)
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,
@@ -435,7 +441,7 @@ class TorqueEstimator:
         self._monitor_stamp_ns = stamp_ns
         self.monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
                             (filtered_nm - inertia) * sign, vp, other, theoretical, sign,
-                            accel)
+                            accel, abs(speed))
         self.counts['monitor_samples'] += 1
 
     # -- diagnostics ----------------------------------------------------------------------

@@ -31,7 +31,9 @@ is dropped), and each window mean is one measurement:
 2. **Detection.** The change d = e - e_hat from the baseline's prediction, less the
    baseline's own uncertainty there (d shrunk towards 0 by ``cusum_baseline_sigmas``
    times the prediction's standard deviation: at an operating point commissioning never
-   saw, the extrapolation error is not a change), projected on each cause's signature
+   saw, the extrapolation error is not a change) and, where the viscosity is assumed, by
+   the friction change of the oil's temperature band (``oil_allowance``), projected on
+   each cause's signature
    (z_j = s_j d / rms(s_j), in N m at a typical operating point), feeds a two-sided CUSUM
    per cause weighted by time, so that the thresholds do not depend on the rates:
    S+ = max(0, S+ + (z - k) T) and S- = max(0, S- + (-z - k) T), in N m s (T the window's
@@ -59,6 +61,7 @@ import numpy as np
 from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
 from .baseline import Baseline, baseline_regressors, BaselineLearner, Commissioning, N_TERMS
 from .monitor_state import ERROR, MonitorPersistence, OK, WARN
+from .oil_allowance import OilAllowance
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
@@ -117,13 +120,18 @@ class WearMonitor(MonitorPersistence):
         The oil viscosity is a parameter, not measured (changes the valve-plate verdict).
     rotor_inertia_kg_m2 : float
         The configured rotor inertia [kg m^2] (part of the torque-gain signature).
+    oil : OilAllowance, optional
+        What the oil's temperature does to the torque without a fault (``oil_allowance``);
+        None: nothing.
 
     """
 
     def __init__(self, config: MonitorSettings, attribution: AttributionSettings,
                  drive_loss_nm: float = 0.0, viscosity_assumed: bool = False,
-                 rotor_inertia_kg_m2: float = 0.0) -> None:
+                 rotor_inertia_kg_m2: float = 0.0, oil: OilAllowance | None = None) -> None:
         self.settings = config
+        self._oil = oil
+        self._unseen_nm = 0.0  # k and the baseline's margin (`_set_signatures`) [N m]
         self._tau = config.ewma_time_constant_s
         self._k = config.cusum_drift_nm
         self._sigmas = config.cusum_baseline_sigmas
@@ -162,6 +170,8 @@ class WearMonitor(MonitorPersistence):
         self._neg = np.zeros(len(CAUSES))
         self.cusum_pos_nm_s = 0.0
         self.cusum_neg_nm_s = 0.0
+        self._allowance_nm_s = 0.0  # the oil allowance taken off, summed over running
+        self._allowance_s = 0.0
         self._set_signatures()
         self.level = OK
         self.alarm_onset_s = math.nan
@@ -172,6 +182,7 @@ class WearMonitor(MonitorPersistence):
         self._n = 0
         self._time = 0.0
         self._se = self._svp = self._so = self._sth = self._sa = 0.0
+        self._sw = 0.0  # |speed|: the oil allowance
 
     @property
     def residual_std_nm(self) -> float:
@@ -185,8 +196,9 @@ class WearMonitor(MonitorPersistence):
 
         A change delta of cause j moves its CUSUM's input by about delta times the RMS of
         its signature over commissioning's points, less the margin taken off the change
-        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std):
-        below the allowance k it never sums. A reported scale holds it in its interval
+        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std, and
+        the oil allowance's mean over the windows since): below the allowance k it never
+        sums. A reported scale holds it in its interval
         while no change is under way. Zero before the baseline is learnt.
 
         Returns
@@ -233,7 +245,7 @@ class WearMonitor(MonitorPersistence):
 
     def update(self, t_s: float, dt_s: float, residual_nm: float, valve_plate_nm: float,
                other_nm: float, theoretical_nm: float, sign: float,
-               accel_rad_s2: float = 0.0) -> int:
+               accel_rad_s2: float = 0.0, speed_abs_rad_s: float = 0.0) -> int:
         """
         Take one settled sample.
 
@@ -255,6 +267,8 @@ class WearMonitor(MonitorPersistence):
             Direction of rotation, +1 or -1.
         accel_rad_s2 : float
             Filtered acceleration the residual's inertia part was computed with [rad/s^2].
+        speed_abs_rad_s : float
+            |Speed| [rad/s] (the oil allowance's viscous friction).
 
         Returns
         -------
@@ -273,6 +287,7 @@ class WearMonitor(MonitorPersistence):
         self._so += other_nm
         self._sth += theoretical_nm * sign
         self._sa += accel_rad_s2 * sign
+        self._sw += speed_abs_rad_s
         if self._time >= self._window_s:
             self._close(t_s)
             self._open(sign)
@@ -281,7 +296,8 @@ class WearMonitor(MonitorPersistence):
     def update_many(self, t_s: list[float], dt_s: list[float], residual_nm: list[float],
                     valve_plate_nm: list[float], other_nm: list[float],
                     theoretical_nm: list[float], sign: list[float],
-                    accel_rad_s2: list[float] | None = None) -> MonitorTrace:
+                    accel_rad_s2: list[float] | None = None,
+                    speed_abs_rad_s: list[float] | None = None) -> MonitorTrace:
         """
         Take many settled samples in order: `update` for each, in one lean loop.
 
@@ -298,6 +314,8 @@ class WearMonitor(MonitorPersistence):
             Direction of rotation per sample, +1 or -1.
         accel_rad_s2 : list of float, optional
             Filtered acceleration per sample [rad/s^2] (None: 0).
+        speed_abs_rad_s : list of float, optional
+            |Speed| per sample [rad/s] (None: 0).
 
         Returns
         -------
@@ -308,17 +326,21 @@ class WearMonitor(MonitorPersistence):
         window = self._window_s
         cur_sign, n, time = self._sign, self._n, self._time
         se, svp, so, sth, sa = self._se, self._svp, self._so, self._sth, self._sa
+        sw = self._sw
         accel = [0.0] * len(t_s) if accel_rad_s2 is None else accel_rad_s2
+        speeds = [0.0] * len(t_s) if speed_abs_rad_s is None else speed_abs_rad_s
         # the state changes only when a window closes: kept as (from sample i, state) runs
         runs = [(0, self._trace_state())]
-        for i, (t, dt, r, vp, other, th, sgn, a) in enumerate(zip(
+        for i, (t, dt, r, vp, other, th, sgn, a, w) in enumerate(zip(
                 t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign, accel,
-                strict=True)):
+                speeds, strict=True)):
             if sgn != cur_sign:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
+                self._sw = sw
                 self._close(t)
                 cur_sign, n, time, se, svp, so, sth, sa = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+                sw = 0.0
                 runs.append((i, self._trace_state()))
             n += 1
             time += dt
@@ -327,16 +349,20 @@ class WearMonitor(MonitorPersistence):
             so += other
             sth += th * sgn
             sa += a * sgn
+            sw += w
             if time >= window:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
+                self._sw = sw
                 self._close(t)
                 n, time, se, svp, so, sth, sa = 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+                sw = 0.0
                 runs.append((i, self._trace_state()))
         total = len(t_s)
         self.samples += total
         self._sign, self._n, self._time = cur_sign, n, time
         self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
+        self._sw = sw
         columns: tuple[list, ...] = ([], [], [], [], [], [], [])
         for (start, state), (end, _) in zip(runs, [*runs[1:], (total, ())], strict=True):
             if end > start:
@@ -378,7 +404,12 @@ class WearMonitor(MonitorPersistence):
         # the baseline's own uncertainty at this point is not a change: d shrunk by it (on a
         # cycle reaching loads commissioning never saw, the extrapolation error alone would
         # otherwise accumulate)
-        margin = self._sigmas * math.sqrt(prediction_var)
+        # and so is what the oil's temperature does to the torque (``oil_allowance``)
+        oil = self._oil
+        allowance = oil.window_nm(self._sw * inv) if oil is not None else 0.0
+        self._allowance_nm_s += allowance * duration
+        self._allowance_s += duration
+        margin = self._sigmas * math.sqrt(prediction_var) + allowance
         shrunk = d - margin if d > margin else (d + margin if d < -margin else 0.0)
         sig = self._m @ h
         z = sig * shrunk / self._norm
@@ -396,6 +427,8 @@ class WearMonitor(MonitorPersistence):
             elif level == OK:
                 self.alarm_onset_s = math.nan
             self.level = level
+        self._undetectable = (self._unseen_nm + self._allowance_nm_s / self._allowance_s) \
+            / self._norm
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
 
@@ -424,6 +457,7 @@ class WearMonitor(MonitorPersistence):
             self._m = np.zeros((len(CAUSES), N_TERMS))
             self._norm = np.ones(len(CAUSES))
             self._undetectable = np.zeros(len(CAUSES))
+            self._unseen_nm = 0.0
             return
         self._m = signature_matrix(self.baseline, self._drive_loss, self._inertia)
         weight = max(self.learner.weight, 1e-300)
@@ -432,7 +466,11 @@ class WearMonitor(MonitorPersistence):
         # the change the CUSUMs do not see (`undetectable_change`)
         prediction_std = math.sqrt(max(float(np.trace(self.baseline.covariance
                                                       @ self.learner.a)) / weight, 0.0))
-        self._undetectable = (self._k + self._sigmas * prediction_std) / self._norm
+        # with the oil allowance's mean over the windows since (``oil_allowance``)
+        self._unseen_nm = self._k + self._sigmas * prediction_std
+        allowance = self._allowance_nm_s / self._allowance_s if self._allowance_s > 0.0 \
+            else 0.0
+        self._undetectable = (self._unseen_nm + allowance) / self._norm
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, then the change."""

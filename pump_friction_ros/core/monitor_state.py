@@ -64,6 +64,8 @@ class MonitorPersistence:
     _var: float
     _pos: np.ndarray
     _neg: np.ndarray
+    _allowance_nm_s: float
+    _allowance_s: float
 
     @property
     def fit(self) -> Baseline:
@@ -98,7 +100,8 @@ class MonitorPersistence:
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
                 'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
                 'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
-                'isolation': self.isolation.state()}
+                'isolation': self.isolation.state(),
+                'allowance_nm_s': self._allowance_nm_s, 'allowance_s': self._allowance_s}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -141,6 +144,12 @@ class MonitorPersistence:
                 np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
                 and math.isfinite(ewma) and math.isfinite(var)):
             raise ValueError('monitor sums of the wrong shape or not finite')
+        # the oil allowance's sums came later: a file without them starts them afresh
+        allowance = (float(state.get('allowance_nm_s', 0.0)),  # type: ignore[arg-type]
+                     float(state.get('allowance_s', 0.0)))  # type: ignore[arg-type]
+        if not all(math.isfinite(x) and x >= 0.0 for x in allowance):
+            raise ValueError('monitor allowance sums negative or not finite')
+        self._allowance_nm_s, self._allowance_s = allowance
         self._set_signatures()
         self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
         self._pos, self._neg = pos, neg

@@ -201,6 +201,12 @@ class EstimatorConfig:
         'change (an oil warm-up without temperature input): the drift between its halves, '
         'extrapolated over this time constant, must stay below half the CUSUM allowance [s]; '
         '0: the drift alone.', 0.0, 1e6)
+    oil_temperature_band_c: float = _param(
+        0.0, 'With viscosity_source parameter: how far the oil temperature strays from its '
+        'value at commissioning [K]. The friction change that the viscosity makes over this '
+        'band (oil_viscosity_40c/100c_m2_s law) is not taken as a change of the pump, and '
+        'valve-plate changes that small are not seen (docs/monitor.md); 0: none; ignored '
+        'with the temperature topic.', 0.0, 100.0)
     attribution_window_s: float = _param(
         0.25, 'Monitored running averaged into one measurement of the baseline and the '
         'isolation [s].', 0.01, 60.0)

@@ -1,0 +1,155 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""An assumed viscosity: the oil's temperature band is not a change of the pump."""
+
+import math
+
+import numpy as np
+from pump_friction_ros.core.attribution import AttributionSettings
+from pump_friction_ros.core.baseline import baseline_regressors
+from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
+from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
+from pump_friction_ros.core.oil_allowance import band_friction_nm, OilAllowance
+from pump_friction_ros.physics.friction import valve_plate_viscous_torque_nm
+from pump_friction_ros.physics.oil import WaltherViscosity
+from pump_friction_ros.table.friction_table import build_table
+import pytest
+
+VG68 = WaltherViscosity(68e-6, 8.7e-6)  # ISO VG 68, viscosity index ~100
+TRUTH = np.array([0.2, -0.15, 0.03, 0.01, -0.03, 1.2e-4])  # a pump unlike its model
+WINDOW_SAMPLES = 250
+DT = 1e-3
+
+
+@pytest.fixture(scope='module')
+def table(paper_params):
+    return build_table(paper_params)
+
+
+def test_band_friction_holds_the_valve_plates_couette_shear_over_the_band(
+        table, paper_params):
+    nu = VG68(50.0)
+    speeds, change = band_friction_nm(table, nu, VG68, 3.0)
+    vp, rho = paper_params.valve_plate, paper_params.oil.density_kg_m3
+    # sec. 4.2: the film shear rho nu |w| / h * int r^3 is linear in nu; 3 K colder
+    shear = [float(valve_plate_viscous_torque_nm(w, VG68(47.0), rho, vp)
+                   - valve_plate_viscous_torque_nm(w, nu, rho, vp)) for w in speeds]
+    assert all(c >= s * (1.0 - 1e-9) for c, s in zip(change, shear, strict=True))
+    # 3 K of VG 68 at 50 degC are 14 % of its viscosity (ASTM D341)
+    assert 0.13 < VG68(47.0) / nu - 1.0 < 0.15
+    # the bearing's drag adds to the film shear, but less than the film shear at speed
+    top = speeds.index(max(speeds))
+    assert shear[top] < change[top] < 3.0 * shear[top]
+    # no band, no allowance; a wider band, a larger one
+    assert band_friction_nm(table, nu, VG68, 0.0)[1] == [0.0] * len(speeds)
+    wider = band_friction_nm(table, nu, VG68, 6.0)[1]
+    assert all(w >= c for w, c in zip(wider, change, strict=True)) and wider[top] > change[top]
+
+
+def test_allowance_interpolates_along_speed_and_holds_beyond_the_axis():
+    oil = OilAllowance([0.0, 100.0, 300.0], [0.0, 0.02, 0.08])
+    assert oil.window_nm(50.0) == pytest.approx(0.01)
+    assert oil.window_nm(200.0) == pytest.approx(0.05)
+    assert oil.window_nm(1e4) == pytest.approx(0.08)
+
+
+def _monitor(oil):
+    config = EstimatorConfig()
+    return WearMonitor(settings_view(config, MonitorSettings),
+                       settings_view(config, AttributionSettings), 0.0, True, 0.0, oil)
+
+
+SLOPE = 1e-4
+"""The band's friction change per speed in these tests [N m / (rad/s)]: a film shear."""
+
+
+def _swing(oil, amplitude, seed=4, windows=3000):
+    """
+    Run a pump as learnt at commissioning whose viscous friction then swings with the oil.
+
+    The swing's torque is amplitude x SLOPE x |speed|, over a 20-minute period of wall time
+    at 10 % monitored running, from 60 s on (commissioning learns in the first 30 s of
+    running). Returns the monitor and whether it ever left OK.
+    """
+    rng = np.random.default_rng(seed)
+    mon = _monitor(oil)
+    t, alarmed, n = 0.0, False, WINDOW_SAMPLES
+    for _ in range(windows):
+        speed = rng.uniform(50.0, 900.0)
+        vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
+        sign = 1.0 if rng.random() < 0.5 else -1.0
+        th = rng.uniform(-3.0, 3.0)
+        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
+        wall = 10.0 * t
+        swing = amplitude * SLOPE * speed * math.sin(2.0 * math.pi * wall / 1200.0) \
+            if wall > 600.0 else 0.0
+        e = float(h @ TRUTH) + swing + rng.normal(0.0, 0.01)
+        trace = mon.update_many([t + i * DT for i in range(n)], [DT] * n, [e] * n, [vp] * n,
+                                [other] * n, [th] * n, [sign] * n, None, [speed] * n)
+        alarmed = alarmed or max(trace.level) > OK
+        t += n * DT
+    return mon, alarmed
+
+
+BAND = OilAllowance([0.0, 1000.0], [0.0, 1000.0 * SLOPE])
+
+
+@pytest.mark.parametrize('seed', [4, 5, 6])
+def test_an_oil_swing_within_the_band_raises_no_alarm_and_one_beyond_it_does(seed):
+    mon, alarmed = _swing(BAND, 0.95, seed)
+    assert not mon.learning and not alarmed
+    # the same swing without the allowance alarms, and three times the band with it
+    assert _swing(None, 0.95, seed)[1] and _swing(BAND, 3.0, seed)[1]
+
+
+def test_the_undetectable_change_grows_by_the_allowance():
+    without, _ = _swing(None, 0.0)
+    with_band, _ = _swing(BAND, 0.0)
+    unseen = without.undetectable_change['valve_plate']
+    grown = with_band.undetectable_change['valve_plate'] - unseen
+    # the mean allowance over the windows (speed uniform on 50-900 rad/s: 475 x SLOPE) over
+    # the RMS of the valve-plate signature, which the same windows give both monitors
+    norm = EstimatorConfig().cusum_drift_nm / unseen  # the baseline's std is tiny here
+    assert grown == pytest.approx(475.0 * SLOPE / norm, rel=0.15)
+    # and a healthy reading's interval spans it
+    assert 1.96 * with_band.valve_plate_scale_std >= with_band.undetectable_change[
+        'valve_plate'] * 0.99
+
+
+def test_the_estimator_allows_for_the_band_only_where_the_viscosity_is_assumed(table):
+    assumed = TorqueEstimator(EstimatorConfig(oil_temperature_band_c=3.0), table, 46e-6,
+                              'hong_doh_2004')
+    measured = TorqueEstimator(EstimatorConfig(viscosity_source='temperature',
+                                               oil_temperature_band_c=3.0), table, 46e-6,
+                               'hong_doh_2004')
+    none = TorqueEstimator(EstimatorConfig(), table, 46e-6, 'hong_doh_2004')  # the default
+    assert assumed.monitor._oil.window_nm(300.0) > 0.0
+    assert measured.monitor._oil is None
+    assert none.monitor._oil.window_nm(300.0) == 0.0
+
+
+def test_a_state_saved_before_the_allowance_loads_and_restarts_its_sums():
+    mon, _ = _swing(BAND, 0.5, windows=400)
+    state = mon.state_dict()
+    assert state['allowance_s'] > 0.0
+    old = {key: value for key, value in state.items()
+           if key not in ('allowance_nm_s', 'allowance_s')}
+    again = _monitor(BAND)
+    again.load_state_dict(old)
+    assert not again.learning and again.level == mon.level
+    assert again.state_dict()['allowance_s'] == 0.0
+    # the undetectable change falls back to k and the baseline's margin alone
+    assert again.undetectable_change['valve_plate'] < mon.undetectable_change['valve_plate']
