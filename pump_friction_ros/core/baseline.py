@@ -157,6 +157,8 @@ class Baseline:
         Residual variance of a window of the nominal length about the fit [N m^2].
     learnt_s : float
         Monitored running the fit is made of [s].
+    temperature_c : float
+        Mean oil temperature of its windows [degC] (NaN: not known; ``oil_allowance``).
 
     """
 
@@ -164,6 +166,7 @@ class Baseline:
     covariance: np.ndarray
     window_var_nm2: float
     learnt_s: float
+    temperature_c: float = math.nan
 
     def predict(self, h: np.ndarray) -> float:
         """Return the healthy residual e_hat = h . b of a window with regressors ``h`` [N m]."""
@@ -240,6 +243,14 @@ class BaselineLearner:
         self.windows = 0
         self.learnt_s = 0.0
         self.time_sum_s2 = 0.0  # sum of duration x time: the windows' mean time
+        self.temperature_sum_c_s = 0.0  # sum of duration x oil temperature, where known
+        self.temperature_time_s = 0.0
+
+    @property
+    def temperature_c(self) -> float:
+        """Return the windows' mean oil temperature, weighted by running [degC] (NaN: none)."""
+        return self.temperature_sum_c_s / self.temperature_time_s \
+            if self.temperature_time_s > 0.0 else math.nan
 
     @property
     def mean_time_s(self) -> float:
@@ -247,7 +258,7 @@ class BaselineLearner:
         return self.time_sum_s2 / self.learnt_s if self.learnt_s > 0.0 else math.nan
 
     def add(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
-            t_s: float = 0.0) -> None:
+            t_s: float = 0.0, temperature_c: float = math.nan) -> None:
         """
         Add one window.
 
@@ -263,6 +274,8 @@ class BaselineLearner:
             Its monitored running [s].
         t_s : float
             Its time [s] (the clock the drift is measured on).
+        temperature_c : float
+            Its oil temperature [degC] (NaN: not known).
 
         """
         self.a += weight * np.outer(h, h)
@@ -272,6 +285,9 @@ class BaselineLearner:
         self.windows += 1
         self.learnt_s += duration_s
         self.time_sum_s2 += duration_s * t_s
+        if math.isfinite(temperature_c):
+            self.temperature_sum_c_s += duration_s * temperature_c
+            self.temperature_time_s += duration_s
 
     def fit(self) -> Baseline:
         """
@@ -298,13 +314,14 @@ class BaselineLearner:
             if dof <= 1.0:
                 break
             var = max(sse / dof, 1e-12)
-        return Baseline(coef, 0.5 * (cov + cov.T), var, self.learnt_s)
+        return Baseline(coef, 0.5 * (cov + cov.T), var, self.learnt_s, self.temperature_c)
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values (for the baseline file)."""
         return {'a': self.a.tolist(), 'b': self.b.tolist(), 'c': self.c,
                 'weight': self.weight, 'windows': self.windows, 'learnt_s': self.learnt_s,
-                'time_sum_s2': self.time_sum_s2}
+                'time_sum_s2': self.time_sum_s2, 'temperature_sum_c_s': self.temperature_sum_c_s,
+                'temperature_time_s': self.temperature_time_s}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -327,6 +344,12 @@ class BaselineLearner:
         self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
         self.time_sum_s2 = time_sum
         self.windows = int(state['windows'])  # type: ignore[call-overload]
+        # the oil temperature's sums came later: a file without them knows no temperature
+        temperature = (float(state.get('temperature_sum_c_s', 0.0)),  # type: ignore[arg-type]
+                       float(state.get('temperature_time_s', 0.0)))  # type: ignore[arg-type]
+        if not all(math.isfinite(x) for x in temperature) or temperature[1] < 0.0:
+            raise ValueError('baseline temperature sums negative or not finite')
+        self.temperature_sum_c_s, self.temperature_time_s = temperature
 
 
 class Commissioning:
@@ -412,7 +435,7 @@ class Commissioning:
         return excess / -math.expm1(-apart / tau)
 
     def add(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
-            t_s: float = 0.0) -> bool:
+            t_s: float = 0.0, temperature_c: float = math.nan) -> bool:
         """
         Add a window; return whether the baseline is now complete (`fit` is it).
 
@@ -428,6 +451,8 @@ class Commissioning:
             Its monitored running [s].
         t_s : float
             Its time [s].
+        temperature_c : float
+            Its oil temperature [degC] (NaN: not known).
 
         Returns
         -------
@@ -436,8 +461,8 @@ class Commissioning:
 
         """
         half = 0.5 * self.learn_s
-        self.recent.add(h, e_nm, weight, duration_s, t_s)
-        self.learner.add(h, e_nm, weight, duration_s, t_s)
+        self.recent.add(h, e_nm, weight, duration_s, t_s, temperature_c)
+        self.learner.add(h, e_nm, weight, duration_s, t_s, temperature_c)
         self.fit = self.learner.fit()
         if self.recent.learnt_s < half:
             return False

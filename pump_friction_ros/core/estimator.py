@@ -147,8 +147,11 @@ class TorqueEstimator:
                                    config.rotor_inertia_kg_m2, OilAllowance(
                                        *band_friction_nm(table, self._viscosity_m2_s,
                                                          self._walther,
-                                                         config.oil_temperature_band_c))
-                                   if assumed else None)
+                                                         config.oil_temperature_band_c
+                                                         if assumed else 0.0),
+                                       None if assumed else self._walther,
+                                       config.torque_constant_drift_per_k,
+                                       config.oil_temperature_band_c))
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,
@@ -414,7 +417,7 @@ class TorqueEstimator:
             released = self.settled.update(
                 stamp_ns, self.filter.restarts, measured - steady,
                 abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel,
-                (inertia, vp, bearing + joints + heads, theoretical, speed, accel))
+                (inertia, vp, bearing + joints + heads, theoretical, speed, accel, viscosity))
             if released is not None:
                 self._monitor(*released)
         else:
@@ -429,9 +432,9 @@ class TorqueEstimator:
         return estimate
 
     def _monitor(self, stamp_ns: int, filtered_nm: float,
-                 payload: tuple[float, float, float, float, float, float]) -> None:
+                 payload: tuple[float, float, float, float, float, float, float]) -> None:
         """Feed one settled sample (released by `SettledResidual`) to the wear monitor."""
-        inertia, vp, other, theoretical, speed, accel = payload
+        inertia, vp, other, theoretical, speed, accel, viscosity = payload
         sign = 1.0 if speed > 0.0 else -1.0
         last = self._monitor_stamp_ns
         if last is None and self._learnt_first_ns is None:
@@ -441,7 +444,7 @@ class TorqueEstimator:
         self._monitor_stamp_ns = stamp_ns
         self.monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
                             (filtered_nm - inertia) * sign, vp, other, theoretical, sign,
-                            accel, abs(speed))
+                            accel, abs(speed), viscosity)
         self.counts['monitor_samples'] += 1
 
     # -- diagnostics ----------------------------------------------------------------------

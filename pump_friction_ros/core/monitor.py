@@ -170,7 +170,8 @@ class WearMonitor(MonitorPersistence):
         self._neg = np.zeros(len(CAUSES))
         self.cusum_pos_nm_s = 0.0
         self.cusum_neg_nm_s = 0.0
-        self._allowance_nm_s = 0.0  # the oil allowance taken off, summed over running
+        self._allowance_nm_s = 0.0  # the oil allowances taken off, summed over running
+        self._gain_allowance_nm_s = 0.0
         self._allowance_s = 0.0
         self._set_signatures()
         self.level = OK
@@ -182,7 +183,7 @@ class WearMonitor(MonitorPersistence):
         self._n = 0
         self._time = 0.0
         self._se = self._svp = self._so = self._sth = self._sa = 0.0
-        self._sw = 0.0  # |speed|: the oil allowance
+        self._sw = self._sv = 0.0  # |speed| and viscosity: the oil allowances
 
     @property
     def residual_std_nm(self) -> float:
@@ -245,7 +246,8 @@ class WearMonitor(MonitorPersistence):
 
     def update(self, t_s: float, dt_s: float, residual_nm: float, valve_plate_nm: float,
                other_nm: float, theoretical_nm: float, sign: float,
-               accel_rad_s2: float = 0.0, speed_abs_rad_s: float = 0.0) -> int:
+               accel_rad_s2: float = 0.0, speed_abs_rad_s: float = 0.0,
+               viscosity_m2_s: float = math.nan) -> int:
         """
         Take one settled sample.
 
@@ -269,6 +271,9 @@ class WearMonitor(MonitorPersistence):
             Filtered acceleration the residual's inertia part was computed with [rad/s^2].
         speed_abs_rad_s : float
             |Speed| [rad/s] (the oil allowance's viscous friction).
+        viscosity_m2_s : float
+            The viscosity the expected torque was computed with [m^2/s] (with the
+            temperature topic it gives the oil temperature; NaN: not known).
 
         Returns
         -------
@@ -288,6 +293,7 @@ class WearMonitor(MonitorPersistence):
         self._sth += theoretical_nm * sign
         self._sa += accel_rad_s2 * sign
         self._sw += speed_abs_rad_s
+        self._sv += viscosity_m2_s
         if self._time >= self._window_s:
             self._close(t_s)
             self._open(sign)
@@ -297,7 +303,8 @@ class WearMonitor(MonitorPersistence):
                     valve_plate_nm: list[float], other_nm: list[float],
                     theoretical_nm: list[float], sign: list[float],
                     accel_rad_s2: list[float] | None = None,
-                    speed_abs_rad_s: list[float] | None = None) -> MonitorTrace:
+                    speed_abs_rad_s: list[float] | None = None,
+                    viscosity_m2_s: list[float] | None = None) -> MonitorTrace:
         """
         Take many settled samples in order: `update` for each, in one lean loop.
 
@@ -314,8 +321,8 @@ class WearMonitor(MonitorPersistence):
             Direction of rotation per sample, +1 or -1.
         accel_rad_s2 : list of float, optional
             Filtered acceleration per sample [rad/s^2] (None: 0).
-        speed_abs_rad_s : list of float, optional
-            |Speed| per sample [rad/s] (None: 0).
+        speed_abs_rad_s, viscosity_m2_s : list of float, optional
+            Per sample, as `update` takes them [rad/s, m^2/s] (None: 0 and NaN).
 
         Returns
         -------
@@ -326,21 +333,22 @@ class WearMonitor(MonitorPersistence):
         window = self._window_s
         cur_sign, n, time = self._sign, self._n, self._time
         se, svp, so, sth, sa = self._se, self._svp, self._so, self._sth, self._sa
-        sw = self._sw
+        sw, sv = self._sw, self._sv
         accel = [0.0] * len(t_s) if accel_rad_s2 is None else accel_rad_s2
         speeds = [0.0] * len(t_s) if speed_abs_rad_s is None else speed_abs_rad_s
+        viscosity = [math.nan] * len(t_s) if viscosity_m2_s is None else viscosity_m2_s
         # the state changes only when a window closes: kept as (from sample i, state) runs
         runs = [(0, self._trace_state())]
-        for i, (t, dt, r, vp, other, th, sgn, a, w) in enumerate(zip(
+        for i, (t, dt, r, vp, other, th, sgn, a, w, nu) in enumerate(zip(
                 t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign, accel,
-                speeds, strict=True)):
+                speeds, viscosity, strict=True)):
             if sgn != cur_sign:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-                self._sw = sw
+                self._sw, self._sv = sw, sv
                 self._close(t)
                 cur_sign, n, time, se, svp, so, sth, sa = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-                sw = 0.0
+                sw = sv = 0.0
                 runs.append((i, self._trace_state()))
             n += 1
             time += dt
@@ -350,19 +358,20 @@ class WearMonitor(MonitorPersistence):
             sth += th * sgn
             sa += a * sgn
             sw += w
+            sv += nu
             if time >= window:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-                self._sw = sw
+                self._sw, self._sv = sw, sv
                 self._close(t)
                 n, time, se, svp, so, sth, sa = 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-                sw = 0.0
+                sw = sv = 0.0
                 runs.append((i, self._trace_state()))
         total = len(t_s)
         self.samples += total
         self._sign, self._n, self._time = cur_sign, n, time
         self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-        self._sw = sw
+        self._sw, self._sv = sw, sv
         columns: tuple[list, ...] = ([], [], [], [], [], [], [])
         for (start, state), (end, _) in zip(runs, [*runs[1:], (total, ())], strict=True):
             if end > start:
@@ -388,8 +397,10 @@ class WearMonitor(MonitorPersistence):
         weight = duration / self._window_s
         self.windows += 1
         baseline = self.baseline
+        oil = self._oil
+        temperature = oil.temperature_c(self._sv * inv) if oil is not None else math.nan
         if baseline is None:
-            self._learn(h, e, weight, duration, t_s)
+            self._learn(h, e, weight, duration, t_s, temperature)
             return
         d = e - baseline.predict(h)
         prediction_var = baseline.prediction_var(h)
@@ -404,13 +415,20 @@ class WearMonitor(MonitorPersistence):
         # the baseline's own uncertainty at this point is not a change: d shrunk by it (on a
         # cycle reaching loads commissioning never saw, the extrapolation error alone would
         # otherwise accumulate)
-        # and so is what the oil's temperature does to the torque (``oil_allowance``)
-        oil = self._oil
-        allowance = oil.window_nm(self._sw * inv) if oil is not None else 0.0
-        self._allowance_nm_s += allowance * duration
+        # and so is what the oil's temperature does to the torque (``oil_allowance``): the
+        # viscosity's band where it is assumed, the torque constant's drift
+        viscous = low = high = 0.0
+        if oil is not None:
+            viscous = oil.window_nm(self._sw * inv)
+            low, high = oil.gain_interval_nm((self._sth + self._svp + self._so) * inv,
+                                             temperature, baseline.temperature_c)
+        self._allowance_nm_s += viscous * duration
+        self._gain_allowance_nm_s += 0.5 * (high - low) * duration
         self._allowance_s += duration
-        margin = self._sigmas * math.sqrt(prediction_var) + allowance
-        shrunk = d - margin if d > margin else (d + margin if d < -margin else 0.0)
+        margin = self._sigmas * math.sqrt(prediction_var) + viscous
+        high += margin
+        low -= margin
+        shrunk = d - high if d > high else (d - low if d < low else 0.0)
         sig = self._m @ h
         z = sig * shrunk / self._norm
         k, cap = self._k, self._cap
@@ -427,8 +445,7 @@ class WearMonitor(MonitorPersistence):
             elif level == OK:
                 self.alarm_onset_s = math.nan
             self.level = level
-        self._undetectable = (self._unseen_nm + self._allowance_nm_s / self._allowance_s) \
-            / self._norm
+        self._undetectable = self._unseen(self._allowance_s)
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
 
@@ -443,9 +460,9 @@ class WearMonitor(MonitorPersistence):
         return self.commissioning.fit
 
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
-               t_s: float) -> None:
+               t_s: float, temperature_c: float) -> None:
         """Add a commissioning window; complete the baseline once learnt and stationary."""
-        if self.commissioning.add(h, e_nm, weight, duration_s, t_s):
+        if self.commissioning.add(h, e_nm, weight, duration_s, t_s, temperature_c):
             self.baseline = self.fit
             self._reset_detection()
         else:
@@ -466,11 +483,15 @@ class WearMonitor(MonitorPersistence):
         # the change the CUSUMs do not see (`undetectable_change`)
         prediction_std = math.sqrt(max(float(np.trace(self.baseline.covariance
                                                       @ self.learner.a)) / weight, 0.0))
-        # with the oil allowance's mean over the windows since (``oil_allowance``)
         self._unseen_nm = self._k + self._sigmas * prediction_std
-        allowance = self._allowance_nm_s / self._allowance_s if self._allowance_s > 0.0 \
-            else 0.0
-        self._undetectable = (self._unseen_nm + allowance) / self._norm
+        self._undetectable = self._unseen(self._allowance_s)
+
+    def _unseen(self, running_s: float) -> np.ndarray:
+        """Return the undetectable change per cause, with the allowances' means so far."""
+        if not running_s > 0.0:
+            return self._unseen_nm / self._norm
+        allowance = (self._allowance_nm_s + self._gain_allowance_nm_s) / running_s
+        return (self._unseen_nm + allowance) / self._norm
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, then the change."""

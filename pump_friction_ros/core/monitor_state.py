@@ -65,6 +65,7 @@ class MonitorPersistence:
     _pos: np.ndarray
     _neg: np.ndarray
     _allowance_nm_s: float
+    _gain_allowance_nm_s: float
     _allowance_s: float
 
     @property
@@ -101,7 +102,9 @@ class MonitorPersistence:
                 'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
                 'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
                 'isolation': self.isolation.state(),
-                'allowance_nm_s': self._allowance_nm_s, 'allowance_s': self._allowance_s}
+                'allowance_nm_s': self._allowance_nm_s,
+                'gain_allowance_nm_s': self._gain_allowance_nm_s,
+                'allowance_s': self._allowance_s}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -145,11 +148,11 @@ class MonitorPersistence:
                 and math.isfinite(ewma) and math.isfinite(var)):
             raise ValueError('monitor sums of the wrong shape or not finite')
         # the oil allowance's sums came later: a file without them starts them afresh
-        allowance = (float(state.get('allowance_nm_s', 0.0)),  # type: ignore[arg-type]
-                     float(state.get('allowance_s', 0.0)))  # type: ignore[arg-type]
+        allowance = [float(state.get(key, 0.0))  # type: ignore[arg-type]
+                     for key in ('allowance_nm_s', 'gain_allowance_nm_s', 'allowance_s')]
         if not all(math.isfinite(x) and x >= 0.0 for x in allowance):
             raise ValueError('monitor allowance sums negative or not finite')
-        self._allowance_nm_s, self._allowance_s = allowance
+        self._allowance_nm_s, self._gain_allowance_nm_s, self._allowance_s = allowance
         self._set_signatures()
         self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
         self._pos, self._neg = pos, neg

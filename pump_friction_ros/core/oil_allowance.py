@@ -13,27 +13,44 @@
 # limitations under the License.
 
 """
-The friction change of an oil whose temperature the node does not know: the allowance.
+What the oil's temperature does to the torque without any fault: the monitor's allowances.
 
-With ``viscosity_source: parameter`` the node is told one viscosity, and the healthy
-baseline is learnt at the oil temperature of commissioning. Later the oil is a few kelvin
-warmer or cooler. The valve plate's film shear is linear in the viscosity (Couette shear,
-sec. 4.2) and the bearing's drag rises with it, so the torque moves though nothing wore: on
-an ISO VG 68 oil at 50 degC, 3 K are 14 % of the viscosity (ASTM D341). Measured on the
-bank's steps without temperature topic, seed 1: an oil swinging +-2.9 K over 20 min raised a
-WARN at every swing's warm side (3 in an hour, valve plate and other friction leading).
+The healthy baseline is learnt at the oil temperature of commissioning. Later the oil is
+warmer or cooler, and two things move the torque though nothing wore:
 
-The friction change over ``oil_temperature_band_c`` either side (0, none, by default: the
-band is the installation's, from its records), along the speed axis
-(`band_friction_nm`), is a bound, not an estimate: the change from the baseline is shrunk by
-it before the CUSUM accumulates it (``monitor``), as it is by the baseline's own
-uncertainty. A friction change smaller than the allowance at a point is not seen there; the
-undetectable change that the published intervals span includes it. With the temperature
-topic the table follows the viscosity and there is no allowance.
+1. **The viscosity, where it is assumed** (``viscosity_source: parameter``). The valve
+   plate's film shear is linear in the viscosity (Couette shear, sec. 4.2) and the
+   bearing's drag rises with it; on an ISO VG 68 oil at 50 degC, 3 K are 14 % of the
+   viscosity (ASTM D341). Measured on the bank's steps without temperature topic, seed 1:
+   an oil swinging +-2.9 K over 20 min raised a WARN at every swing's warm side. The
+   friction change over ``oil_temperature_band_c`` either side (0, none, by default: the
+   band is the installation's, from its records), along the speed axis
+   (`band_friction_nm`), is taken off the change of every cause. With the temperature
+   topic the table follows the viscosity and this part is zero.
+2. **The drive's torque constant.** Torque from current reads k_t i with a k_t of one
+   temperature; NdFeB magnets lose about 0.12 % of their remanence per K, so a warm motor
+   delivers less than the drive assumes and the measured torque reads high by up to
+   ``torque_constant_drift_per_k`` times the temperature change times the torque: 4-5 %
+   over a cold start. Measured on the bank's cold start with the topic, seed 1: a drive
+   drifting 0.94e-3 / K, commissioned at 23 degC, went to ERROR (not friction) as the oil
+   reached 57 degC. With the topic the change is the oil temperature's from commissioning's
+   mean (the oil standing for the flanged motor's); without it, the band, either way. The
+   drift is one-sided (`OilAllowance.gain_interval_nm`): warmer, a pumping window reads high
+   and a motoring one low. In each window only its own side is allowed, so wear, which adds
+   friction in both, keeps its full sensitivity in the windows whose drift goes the other
+   way. (A symmetric allowance of the same size hid a valve plate's x1.8 on the bank's cold
+   starts; one on the measurement causes' sums alone let the friction causes' two-sided
+   sums collect the drift's excursions.)
+
+Both are bounds, not estimates: the change from the baseline is shrunk by them before the
+CUSUMs accumulate it (``monitor``), as it is by the baseline's own uncertainty. A change
+smaller than its allowance is not seen; the undetectable change that the published intervals
+span includes the viscous allowance's mean and half the drift interval's mean width.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Protocol
 
 import numpy as np
@@ -99,24 +116,36 @@ def band_friction_nm(table: _MagnitudeTable, viscosity_m2_s: float, oil: Walther
 
 class OilAllowance:
     """
-    The friction change the oil's unknown temperature may make at a window's speed.
+    The torque change the oil's temperature may make at a window's operating point.
 
     Parameters
     ----------
     speeds_rad_s : list of float
         Speeds [rad/s], increasing (`band_friction_nm`).
     change_nm : list of float
-        The friction change over the band there [N m].
+        The friction change over the band there [N m] (zeros with the temperature topic).
+    oil : WaltherViscosity, optional
+        The oil's law, where the viscosity is measured (the temperature topic): a window's
+        temperature is read back from its viscosity. None: the temperature is not known.
+    drift_per_k : float
+        ``torque_constant_drift_per_k`` [1/K].
+    band_c : float
+        ``oil_temperature_band_c`` [K]: the temperature change where it is not known.
 
     """
 
-    def __init__(self, speeds_rad_s: list[float], change_nm: list[float]) -> None:
+    def __init__(self, speeds_rad_s: list[float], change_nm: list[float],
+                 oil: WaltherViscosity | None = None, drift_per_k: float = 0.0,
+                 band_c: float = 0.0) -> None:
         self._speeds = np.asarray(speeds_rad_s, dtype=float)
         self._change = np.asarray(change_nm, dtype=float)
+        self._oil = oil
+        self.drift_per_k = drift_per_k
+        self.band_c = band_c
 
     def window_nm(self, speed_abs_rad_s: float) -> float:
         """
-        Return the allowance at a window's mean |speed| [N m].
+        Return the viscous friction's change over the band at a window's mean |speed| [N m].
 
         Parameters
         ----------
@@ -130,3 +159,57 @@ class OilAllowance:
 
         """
         return float(np.interp(speed_abs_rad_s, self._speeds, self._change))
+
+    def temperature_c(self, viscosity_m2_s: float) -> float:
+        """
+        Return a window's oil temperature from its mean viscosity [degC].
+
+        Parameters
+        ----------
+        viscosity_m2_s : float
+            The window's mean viscosity [m^2/s].
+
+        Returns
+        -------
+        float
+            The temperature; NaN where the viscosity is assumed or not a viscosity.
+
+        """
+        if self._oil is None or not math.isfinite(viscosity_m2_s) or viscosity_m2_s <= 0.0:
+            return math.nan
+        return self._oil.temperature_c(viscosity_m2_s)
+
+    def gain_interval_nm(self, delivered_nm: float, temperature_c: float,
+                         reference_c: float) -> tuple[float, float]:
+        """
+        Return the interval the torque constant's drift may move a window's residual in [N m].
+
+        A warm NdFeB motor has a smaller torque constant than the drive assumes, so the
+        measured torque reads high by c (T - T_ref) times the delivered torque, c between 0
+        and ``drift_per_k``: one-sided, its sign that of (T - T_ref) times the torque. In a
+        window where the drift moves the residual one way, a change the other way keeps its
+        full sensitivity (motoring while warmer: wear still adds friction).
+
+        Parameters
+        ----------
+        delivered_nm : float
+            The window's mean delivered torque in the friction direction [N m] (theoretical
+            times the direction of rotation, plus friction).
+        temperature_c : float
+            Its oil temperature [degC] (NaN: not known).
+        reference_c : float
+            Commissioning's mean oil temperature [degC] (NaN: not known).
+
+        Returns
+        -------
+        tuple of float
+            (low, high), low <= 0 <= high; where the temperature change is not known, the
+            band either way: -+ drift x band x |torque|.
+
+        """
+        delta = temperature_c - reference_c
+        if not math.isfinite(delta):
+            bound = self.drift_per_k * self.band_c * abs(delivered_nm)
+            return -bound, bound
+        drift = self.drift_per_k * delta * delivered_nm
+        return (drift, 0.0) if drift < 0.0 else (0.0, drift)
