@@ -18,12 +18,8 @@ import math
 
 import numpy as np
 from pump_friction_ros.core.attribution import AttributionSettings, Verdict
-from pump_friction_ros.core.baseline import (
-    baseline_regressors,
-    BaselineLearner,
-    Commissioning,
-    spd_inverse,
-)
+from pump_friction_ros.core.baseline import baseline_regressors, BaselineLearner, spd_inverse
+from pump_friction_ros.core.commissioning import Commissioning
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WARN, WearMonitor
 from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
 import pytest

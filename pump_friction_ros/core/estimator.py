@@ -140,18 +140,15 @@ class TorqueEstimator:
         self._zero_speed = table.zero_speed_threshold_rad_s
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
-        assumed = not self._use_temperature
+        assumed, band = not self._use_temperature, config.oil_temperature_band_c
+        oil = OilAllowance(*band_friction_nm(table, self._viscosity_m2_s, self._walther,
+                                             band if assumed else 0.0),
+                           None if assumed else self._walther,
+                           config.torque_constant_drift_per_k, band)
         self.monitor = WearMonitor(settings_view(config, MonitorSettings),
                                    settings_view(config, AttributionSettings),
                                    config.drive_loss_torque_nm, assumed,
-                                   config.rotor_inertia_kg_m2, OilAllowance(
-                                       *band_friction_nm(table, self._viscosity_m2_s,
-                                                         self._walther,
-                                                         config.oil_temperature_band_c
-                                                         if assumed else 0.0),
-                                       None if assumed else self._walther,
-                                       config.torque_constant_drift_per_k,
-                                       config.oil_temperature_band_c))
+                                   config.rotor_inertia_kg_m2, oil)
         self._lookup: ExactTableLookup | None = None
         self.filter = SpeedFilter(config.accel_filter_time_constant_s, self._max_age_ns)
         self.settled = SettledResidual(config.accel_filter_time_constant_s, self._max_age_ns,

@@ -52,15 +52,14 @@ the level), so that the node keeps it across restarts (``baseline_file``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 import math
-from typing import NamedTuple
 
 import numpy as np
 
 from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
-from .baseline import Baseline, baseline_regressors, BaselineLearner, Commissioning, N_TERMS
-from .monitor_state import ERROR, MonitorPersistence, OK, WARN
+from .baseline import Baseline, baseline_regressors, BaselineLearner, N_TERMS
+from .commissioning import Commissioning
+from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
@@ -75,32 +74,6 @@ LEVEL_NAMES = {OK: 'OK', WARN: 'WARN', ERROR: 'ERROR', STALE: 'STALE'}
 MIN_WINDOW_SAMPLES = 10
 """A window with fewer monitored samples (a short burst between reversals) is not a
 measurement: its mean would carry more of the reversal than of the steady friction."""
-
-
-class MonitorTrace(NamedTuple):
-    """The monitor's state after each of many samples (`WearMonitor.update_many`)."""
-
-    level: list[int]
-    cusum_pos_nm_s: list[float]
-    cusum_neg_nm_s: list[float]
-    valve_plate_scale: list[float]  # `WearMonitor.theta_vp`
-    other_scale: list[float]  # `WearMonitor.theta_rest`
-    valve_plate_scale_std: list[float]
-    other_scale_std: list[float]
-
-
-@dataclass(frozen=True)
-class MonitorSettings:
-    """The node parameters of the detection (declared in ``node_parameters``)."""
-
-    ewma_time_constant_s: float
-    cusum_drift_nm: float
-    cusum_baseline_sigmas: float
-    cusum_warn_nm_s: float
-    cusum_error_nm_s: float
-    cusum_clear_ratio: float
-    baseline_learn_s: float
-    baseline_settle_time_constant_s: float
 
 
 class WearMonitor(MonitorPersistence):

@@ -15,6 +15,8 @@
 """
 What the wear monitor has learnt, as plain values: the node keeps it across restarts.
 
+(With the monitor's settings and trace records, `MonitorSettings` and `MonitorTrace`.)
+
 `MonitorPersistence` is the part of ``monitor.WearMonitor`` that writes its state out and
 reads it back (the node's ``baseline_file``, docs/node.md): the baseline's sums and
 whether it is complete, the CUSUM sums, the level and the EWMA, the isolation's sums; not
@@ -24,8 +26,9 @@ refused and changes nothing.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 import math
-from typing import TYPE_CHECKING
+from typing import NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
@@ -33,11 +36,38 @@ from .attribution import CAUSES
 
 if TYPE_CHECKING:
     from .attribution import FaultIsolation
-    from .baseline import Baseline, Commissioning
+    from .baseline import Baseline
+    from .commissioning import Commissioning
 
-__all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence']
+__all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence', 'MonitorSettings', 'MonitorTrace']
 
 OK, WARN, ERROR = 0, 1, 2
+
+
+class MonitorTrace(NamedTuple):
+    """The monitor's state after each of many samples (`WearMonitor.update_many`)."""
+
+    level: list[int]
+    cusum_pos_nm_s: list[float]
+    cusum_neg_nm_s: list[float]
+    valve_plate_scale: list[float]  # `WearMonitor.theta_vp`
+    other_scale: list[float]  # `WearMonitor.theta_rest`
+    valve_plate_scale_std: list[float]
+    other_scale_std: list[float]
+
+
+@dataclass(frozen=True)
+class MonitorSettings:
+    """The node parameters of the detection (declared in ``node_parameters``)."""
+
+    ewma_time_constant_s: float
+    cusum_drift_nm: float
+    cusum_baseline_sigmas: float
+    cusum_warn_nm_s: float
+    cusum_error_nm_s: float
+    cusum_clear_ratio: float
+    baseline_learn_s: float
+    baseline_settle_time_constant_s: float
 
 
 class MonitorPersistence:

@@ -202,18 +202,14 @@ class EstimatorConfig:
         'extrapolated over this time constant, must stay below half the CUSUM allowance [s]; '
         '0: the drift alone.', 0.0, 1e6)
     oil_temperature_band_c: float = _param(
-        0.0, 'With viscosity_source parameter: how far the oil temperature strays from its '
-        'value at commissioning [K]. The friction change that the viscosity makes over this '
-        'band (oil_viscosity_40c/100c_m2_s law) is not taken as a change of the pump, and '
-        'valve-plate changes that small are not seen (docs/monitor.md); 0: none; ignored '
-        'with the temperature topic.', 0.0, 100.0)
+        0.0, "viscosity_source parameter: the oil temperature's swing from commissioning "
+        '[K]; its friction change (oil_viscosity_40c/100c law) is not a change of the pump, '
+        'and hides one as small (docs/monitor.md); 0: none.', 0.0, 100.0)
     torque_constant_drift_per_k: float = _param(
-        0.0, "Largest drift of the drive's torque constant with temperature taken as "
-        'normal [1/K] (NdFeB magnets: 1.2e-3, -0.12 %/K of remanence); 0 (default): none, a '
-        'drive that compensates it. This times the temperature change from commissioning '
-        '(oil_temperature topic; else oil_temperature_band_c) times the torque, on its own '
-        'side, is not taken as a change of the pump, and hides wear as large in those '
-        'windows (docs/monitor.md).', 0.0, 0.1)
+        0.0, "Drift of the drive's torque constant with temperature taken as normal [1/K] "
+        '(NdFeB: 1.2e-3); times the temperature change from commissioning (topic, else the '
+        'band) times the torque, on its side, it is not a change of the pump, and hides one '
+        'as large (docs/monitor.md); 0: none, the drive compensates.', 0.0, 0.1)
     attribution_window_s: float = _param(
         0.25, 'Monitored running averaged into one measurement of the baseline and the '
         'isolation [s].', 0.01, 60.0)
