@@ -202,11 +202,13 @@ def feed_one_by_one(core, arrays):
                          ids=['-'.join(c.value for c in combo) for combo in SOURCE_COMBOS])
 def test_irregular_chunks_give_exactly_what_on_input_gives(table, run, speed, torque,
                                                            pressure, viscosity):
+    index = SOURCE_COMBOS.index((speed, torque, pressure, viscosity))
+    oil = index % 2  # every other combination with the oil allowances (oil_allowance) on
     config = dataclasses.replace(EstimatorConfig(), speed_source=speed, torque_source=torque,
                                  pressure_source=pressure, viscosity_source=viscosity,
                                  drive_loss_torque_nm=0.05, baseline_learn_s=0.3,
-                                 cusum_drift_nm=1.0)
-    index = SOURCE_COMBOS.index((speed, torque, pressure, viscosity))
+                                 cusum_drift_nm=1.0, oil_temperature_band_c=3.0 * oil,
+                                 torque_constant_drift_per_k=1.2e-3 * oil)
     arrays = message_stream(run, config, seed=index)
     rng = np.random.default_rng(100 + index)
     node = TorqueEstimator(config, table, 46e-6)

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""An assumed viscosity: the oil's temperature band is not a change of the pump."""
+"""What the oil's temperature does to the torque is not a change of the pump: the allowances."""
 
 import math
 
@@ -23,6 +23,7 @@ from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
 from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
 from pump_friction_ros.core.oil_allowance import band_friction_nm, OilAllowance
+from pump_friction_ros.errors import ConfigError
 from pump_friction_ros.physics.friction import valve_plate_viscous_torque_nm
 from pump_friction_ros.physics.oil import WaltherViscosity
 from pump_friction_ros.table.friction_table import build_table
@@ -174,7 +175,7 @@ def _warm_up(oil, drift_per_k, wear=1.0, seed=7, windows=2400):
 
     The measured torque's gain drifts by drift_per_k per K from commissioning's temperature
     (a drive's k_t); from 700 s of wall time the valve plate is ``wear`` times healthy.
-    Returns the monitor, the first alarm's verdict ('' if none) and the viscosity fed.
+    Returns the monitor and the first alarm's verdict ('' if none).
     """
     rng = np.random.default_rng(seed)
     mon = _monitor(oil)
@@ -226,3 +227,56 @@ def test_a_state_saved_before_the_gain_allowance_loads():
     again = _monitor(measured)
     again.load_state_dict(state)
     assert not again.learning and math.isnan(again.baseline.temperature_c)
+
+
+def test_the_undetectable_change_grows_by_half_the_drift_interval():
+    measured = OilAllowance([0.0], [0.0], VG68, 1.2e-3)
+    with_drift, _ = _warm_up(measured, 1.0e-3)
+    without, _ = _warm_up(OilAllowance([0.0], [0.0], VG68, 0.0), 1.0e-3)
+    mean = with_drift._gain_allowance_nm_s / with_drift._allowance_s  # half the width
+    assert mean > 0.05  # 1.2e-3 x ~30 K x ~4 N m, halved
+    # (k + 2 sigma + mean) / rms(s_j) against (k + 2 sigma) / rms(s_j): the same baseline
+    margin = without._unseen_nm
+    assert with_drift._unseen_nm == margin
+    for cause, grown in with_drift.undetectable_change.items():
+        unseen = without.undetectable_change[cause]
+        assert grown / unseen == pytest.approx(1.0 + mean / margin, rel=1e-9), cause
+
+
+def test_the_estimator_wires_the_oil_law_the_drift_and_the_band(table):
+    config = EstimatorConfig(viscosity_source='temperature', oil_viscosity_40c_m2_s=68e-6,
+                             oil_viscosity_100c_m2_s=8.7e-6, oil_temperature_band_c=2.0,
+                             torque_constant_drift_per_k=1.1e-3)
+    oil = TorqueEstimator(config, table, 46e-6, 'hong_doh_2004').monitor._oil
+    assert oil.temperature_c(VG68(57.0)) == pytest.approx(57.0)  # the topic: read back
+    assert (oil.drift_per_k, oil.band_c) == (1.1e-3, 2.0)
+    assumed = TorqueEstimator(EstimatorConfig(torque_constant_drift_per_k=1.1e-3), table,
+                              46e-6, 'hong_doh_2004').monitor._oil
+    assert math.isnan(assumed.temperature_c(VG68(57.0)))  # a parameter: not known
+
+
+def test_a_drift_that_cannot_act_says_so_in_the_diagnostics(table):
+    quiet = TorqueEstimator(EstimatorConfig(torque_constant_drift_per_k=1.2e-3), table, 46e-6,
+                            'hong_doh_2004')
+    assert 'torque_constant_drift_per_k has no effect' in quiet.diagnostics(0).message
+    for config in (EstimatorConfig(), EstimatorConfig(torque_constant_drift_per_k=1.2e-3,
+                                                      oil_temperature_band_c=3.0)):
+        assert 'no effect' not in TorqueEstimator(config, table, 46e-6).diagnostics(0).message
+    # with the topic, a baseline learnt without the oil temperature (an older file)
+    measured = OilAllowance([0.0], [0.0], VG68, 1.2e-3)
+    mon, _ = _warm_up(measured, 0.0, windows=400)
+    assert mon.allowance_note == ''
+    state = mon.state_dict()
+    for part in ('learner', 'older', 'recent'):
+        for key in ('temperature_sum_c_s', 'temperature_time_s'):
+            del state['commissioning'][part][key]
+    mon.load_state_dict(state)
+    assert 'until the baseline is learnt again' in mon.allowance_note
+
+
+def test_a_band_beyond_the_oil_law_is_refused_in_one_line_and_a_thin_oil_has_no_temperature(
+        table):
+    with pytest.raises(ConfigError, match='outside the viscosity law') as error:
+        band_friction_nm(table, 0.3e-6, VG68, 3.0)  # 0.3 cSt: log log (nu + 0.7) undefined
+    assert '\n' not in str(error.value)
+    assert math.isnan(OilAllowance([0.0], [0.0], VG68).temperature_c(0.2e-6))

@@ -66,7 +66,7 @@ from .node_parameters import (
     TorqueSource,
     ViscositySource,
 )
-from .oil_allowance import band_friction_nm, OilAllowance
+from .oil_allowance import oil_allowance
 from .oil_range import coverage_warning, table_spec_for
 from .settled_residual import SettledResidual
 from .speed_filter import SpeedFilter
@@ -140,11 +140,9 @@ class TorqueEstimator:
         self._zero_speed = table.zero_speed_threshold_rad_s
         self._eff_min_speed = table.efficiency_min_speed_rad_s
         self._eff_min_pressure = table.efficiency_min_pressure_pa
-        assumed, band = not self._use_temperature, config.oil_temperature_band_c
-        oil = OilAllowance(*band_friction_nm(table, self._viscosity_m2_s, self._walther,
-                                             band if assumed else 0.0),
-                           None if assumed else self._walther,
-                           config.torque_constant_drift_per_k, band)
+        assumed = not self._use_temperature
+        oil = oil_allowance(table, self._viscosity_m2_s, self._walther, assumed,
+                            config.oil_temperature_band_c, config.torque_constant_drift_per_k)
         self.monitor = WearMonitor(settings_view(config, MonitorSettings),
                                    settings_view(config, AttributionSettings),
                                    config.drive_loss_torque_nm, assumed,
@@ -463,6 +461,7 @@ class TorqueEstimator:
         """
         axis = self.table.viscosity_axis_m2_s
         extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
+        note = '; '.join(x for x in (note, self.monitor.allowance_note) if x)
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
                         self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
                         extra, note)

@@ -31,9 +31,9 @@ is dropped), and each window mean is one measurement:
 2. **Detection.** The change d = e - e_hat from the baseline's prediction, less the
    baseline's own uncertainty there (d shrunk towards 0 by ``cusum_baseline_sigmas``
    times the prediction's standard deviation: at an operating point commissioning never
-   saw, the extrapolation error is not a change) and, where the viscosity is assumed, by
-   the friction change of the oil's temperature band (``oil_allowance``), projected on
-   each cause's signature
+   saw, the extrapolation error is not a change) and by what the oil's temperature does
+   to the torque (``oil_allowance``: the viscosity's band where it is assumed, the drive's
+   torque constant drifting, on its side), projected on each cause's signature
    (z_j = s_j d / rms(s_j), in N m at a typical operating point), feeds a two-sided CUSUM
    per cause weighted by time, so that the thresholds do not depend on the rates:
    S+ = max(0, S+ + (z - k) T) and S- = max(0, S- + (-z - k) T), in N m s (T the window's
@@ -183,6 +183,15 @@ class WearMonitor(MonitorPersistence):
 
         """
         return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
+
+    @property
+    def allowance_note(self) -> str:
+        """Return why a configured oil allowance has no effect, or '' (for /diagnostics)."""
+        if self._oil is None:
+            return ''
+        baseline = self.baseline
+        return self._oil.note(math.nan if baseline is None else baseline.temperature_c,
+                              baseline is not None)
 
     @property
     def learning(self) -> bool:

@@ -55,9 +55,10 @@ from typing import Protocol
 
 import numpy as np
 
+from ..errors import ConfigError
 from ..physics.oil import WaltherViscosity
 
-__all__ = ['OilAllowance', 'band_friction_nm']
+__all__ = ['OilAllowance', 'band_friction_nm', 'oil_allowance']
 
 
 class _MagnitudeTable(Protocol):
@@ -98,12 +99,22 @@ def band_friction_nm(table: _MagnitudeTable, viscosity_m2_s: float, oil: Walther
     tuple of list
         Speeds [rad/s] (the table's axis) and the friction change there [N m], >= 0.
 
+    Raises
+    ------
+    ConfigError
+        The band reaches beyond the oil's law (one line).
+
     """
     speeds = [float(x) for x in np.asarray(table.speed_axis_rad_s)]
     if not band_c > 0.0:
         return speeds, [0.0] * len(speeds)
-    temperature = oil.temperature_c(viscosity_m2_s)
-    cold, warm = oil(temperature - band_c), oil(temperature + band_c)
+    try:
+        temperature = oil.temperature_c(viscosity_m2_s)
+        cold, warm = oil(temperature - band_c), oil(temperature + band_c)
+    except (ValueError, OverflowError):
+        raise ConfigError(f'oil_temperature_band_c {band_c:g} K about the oil viscosity '
+                          f'{viscosity_m2_s:g} m^2/s is outside the viscosity law of the oil '
+                          '(oil_viscosity_40c/100c_m2_s)') from None
     pressures = np.asarray(table.pressure_axis_pa)
     pressure = float(pressures[pressures.size // 2])
     change = []
@@ -175,7 +186,8 @@ class OilAllowance:
             The temperature; NaN where the viscosity is assumed or not a viscosity.
 
         """
-        if self._oil is None or not math.isfinite(viscosity_m2_s) or viscosity_m2_s <= 0.0:
+        if self._oil is None or not viscosity_m2_s * 1e6 + 0.7 > 1.0 or \
+                not math.isfinite(viscosity_m2_s):  # the inverse law's domain: above 0.3 cSt
             return math.nan
         return self._oil.temperature_c(viscosity_m2_s)
 
@@ -194,7 +206,8 @@ class OilAllowance:
         ----------
         delivered_nm : float
             The window's mean delivered torque in the friction direction [N m] (theoretical
-            times the direction of rotation, plus friction).
+            times the direction of rotation, plus friction; the drive loss and the inertia
+            torque, which the drive also reads through k_t, are left out: a little less).
         temperature_c : float
             Its oil temperature [degC] (NaN: not known).
         reference_c : float
@@ -213,3 +226,61 @@ class OilAllowance:
             return -bound, bound
         drift = self.drift_per_k * delta * delivered_nm
         return (drift, 0.0) if drift < 0.0 else (0.0, drift)
+
+    def note(self, reference_c: float, learnt: bool) -> str:
+        """
+        Return why a configured drift allowance has no effect, or ''.
+
+        Parameters
+        ----------
+        reference_c : float
+            Commissioning's mean oil temperature [degC] (NaN: not known).
+        learnt : bool
+            Whether the baseline is complete.
+
+        Returns
+        -------
+        str
+            One line for /diagnostics; '' where the allowance works or none is configured.
+
+        """
+        if not self.drift_per_k > 0.0 or self.band_c > 0.0:
+            return ''
+        if self._oil is None:
+            return ('torque_constant_drift_per_k has no effect: the oil temperature is not '
+                    'known and oil_temperature_band_c is 0')
+        if learnt and not math.isfinite(reference_c):
+            return ('torque_constant_drift_per_k has no effect until the baseline is learnt '
+                    'again: it holds no oil temperature')
+        return ''
+
+
+def oil_allowance(table: _MagnitudeTable, viscosity_m2_s: float, oil: WaltherViscosity,
+                  viscosity_assumed: bool, band_c: float, drift_per_k: float) -> OilAllowance:
+    """
+    Return the node's allowances from its parameters.
+
+    Parameters
+    ----------
+    table : FrictionTable
+        The node's table.
+    viscosity_m2_s : float
+        The assumed viscosity [m^2/s] (used where ``viscosity_assumed``).
+    oil : WaltherViscosity
+        The oil's law.
+    viscosity_assumed : bool
+        ``viscosity_source: parameter``: the oil temperature is not known.
+    band_c : float
+        ``oil_temperature_band_c`` [K].
+    drift_per_k : float
+        ``torque_constant_drift_per_k`` [1/K].
+
+    Returns
+    -------
+    OilAllowance
+        The viscous band where the viscosity is assumed (zeros otherwise), the oil's law
+        where it is measured, and the drift.
+
+    """
+    band = band_friction_nm(table, viscosity_m2_s, oil, band_c if viscosity_assumed else 0.0)
+    return OilAllowance(*band, None if viscosity_assumed else oil, drift_per_k, band_c)
