@@ -51,29 +51,18 @@ span includes the viscous allowance's mean and half the drift interval's mean wi
 from __future__ import annotations
 
 import math
-from typing import Protocol
 
 import numpy as np
 
 from ..errors import ConfigError
 from ..physics.oil import WaltherViscosity
+from ..physics.units import m2_s_to_cst
+from ..table.friction_table import FrictionTable
 
 __all__ = ['OilAllowance', 'band_friction_nm', 'oil_allowance']
 
 
-class _MagnitudeTable(Protocol):
-    """The friction table's scalar lookup (``table.FrictionTable``)."""
-
-    speed_axis_rad_s: np.ndarray
-    pressure_axis_pa: np.ndarray
-
-    def magnitudes(self, speed_abs_rad_s: float, pressure_abs_pa: float,
-                   viscosity_m2_s: float, motoring: bool = False
-                   ) -> tuple[tuple[float, float, float, float], int]:
-        """Component magnitudes at one point [N m] and the lookup flags."""
-
-
-def band_friction_nm(table: _MagnitudeTable, viscosity_m2_s: float, oil: WaltherViscosity,
+def band_friction_nm(table: FrictionTable, viscosity_m2_s: float, oil: WaltherViscosity,
                      band_c: float) -> tuple[list[float], list[float]]:
     """
     Return the friction change over the oil temperature band, along the table's speed axis.
@@ -186,8 +175,8 @@ class OilAllowance:
             The temperature; NaN where the viscosity is assumed or not a viscosity.
 
         """
-        if self._oil is None or not viscosity_m2_s * 1e6 + 0.7 > 1.0 or \
-                not math.isfinite(viscosity_m2_s):  # the inverse law's domain: above 0.3 cSt
+        if self._oil is None or not m2_s_to_cst(viscosity_m2_s) > 0.3 or \
+                not math.isfinite(viscosity_m2_s):  # the inverse law's domain (ASTM D341)
             return math.nan
         return self._oil.temperature_c(viscosity_m2_s)
 
@@ -255,7 +244,7 @@ class OilAllowance:
         return ''
 
 
-def oil_allowance(table: _MagnitudeTable, viscosity_m2_s: float, oil: WaltherViscosity,
+def oil_allowance(table: FrictionTable, viscosity_m2_s: float, oil: WaltherViscosity,
                   viscosity_assumed: bool, band_c: float, drift_per_k: float) -> OilAllowance:
     """
     Return the node's allowances from its parameters.
