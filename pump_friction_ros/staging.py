@@ -32,13 +32,65 @@ import os
 from pathlib import Path
 import shutil
 import signal
+import sys
 import tempfile
 import threading
 
 from .errors import OutputError
 
 __all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
-           'looks_like_plots', 'remove_empty_folders', 'sigint_held', 'sigint_ignored']
+           'looks_like_plots', 'raise_if_interrupted', 'remove_empty_folders', 'sigint_held',
+           'sigint_ignored', 'sigint_kept']
+
+_SIGINT_SEEN: list[int] = []  # Ctrl-Cs received through `sigint_kept`'s handler
+
+
+def _note_and_raise(signum: int, frame: object) -> None:
+    """Note the Ctrl-C, then raise KeyboardInterrupt as Python's own handler does."""
+    _SIGINT_SEEN.append(signum)
+    raise KeyboardInterrupt
+
+
+def sigint_kept() -> None:
+    """
+    Never lose a Ctrl-C, even one that Python swallows; called once as a command starts.
+
+    Python raises KeyboardInterrupt wherever the main thread is. In a finaliser (the
+    ``__del__`` of a pipe's end collected at that instant, say) it only prints "Exception
+    ignored" and goes on, and the command ran to its end and committed its outputs, exit 0
+    (CI on f314839). From here on the SIGINT handler notes the signal before raising it, a
+    KeyboardInterrupt that a finaliser swallowed is not printed, and `raise_if_interrupted`
+    raises it again where the command checks: between batches and before any output is
+    committed (`commit_all`). A handler not Python's default (Ctrl-C ignored by a runner in
+    the background, say) is left alone.
+    """
+    _SIGINT_SEEN.clear()
+    if threading.current_thread() is threading.main_thread() \
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _note_and_raise)
+    if getattr(sys.unraisablehook, '_previous', None) is None:  # installed once
+        previous = sys.unraisablehook
+
+        def quiet(unraisable: sys.UnraisableHookArgs) -> None:
+            if not (_SIGINT_SEEN and isinstance(unraisable.exc_value, KeyboardInterrupt)):
+                previous(unraisable)
+
+        quiet._previous = previous  # type: ignore[attr-defined]
+        sys.unraisablehook = quiet
+
+
+def raise_if_interrupted() -> None:
+    """
+    Raise KeyboardInterrupt if a Ctrl-C came and was swallowed (`sigint_kept`).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        A Ctrl-C was received since the command started.
+
+    """
+    if _SIGINT_SEEN:
+        raise KeyboardInterrupt
 
 
 @contextmanager
@@ -226,6 +278,7 @@ def commit_all(staged: list[Staged]) -> None:
 
     """
     with sigint_held():
+        raise_if_interrupted()  # one swallowed by a finaliser: nothing goes into place
         for k, item in enumerate(staged):
             try:
                 item.commit()

@@ -473,6 +473,44 @@ def test_a_second_ctrl_c_while_reporting_the_first_still_exits_130_with_one_line
     assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
 
 
+CTRL_C_IN_A_FINALISER = '''
+import os, signal, sys
+from pump_friction_ros.app import cli
+from pump_friction_ros.bags import replay
+
+
+class CollectedDuringTheCtrlC:
+    """An object whose finaliser runs when the Ctrl-C arrives (e.g. a pipe's end)."""
+
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)  # raised in __del__: Python only prints it
+
+
+run = replay._run
+
+
+def run_with_a_ctrl_c_in_a_finaliser(*args, **kwargs):
+    CollectedDuringTheCtrlC()
+    return run(*args, **kwargs)
+
+
+replay._run = run_with_a_ctrl_c_in_a_finaliser
+sys.exit(cli.main(sys.argv[1:]))
+'''
+
+
+def test_a_ctrl_c_that_lands_in_a_finaliser_still_interrupts_and_leaves_nothing(
+        env, tmp_path, long_bag):
+    # CI, f314839: the Ctrl-C landed in a multiprocessing Connection's __del__, where Python
+    # prints a KeyboardInterrupt and goes on: the replay ran to its end and committed (exit 0)
+    res = tmp_path / 'res'
+    proc = subprocess.run([sys.executable, '-c', CTRL_C_IN_A_FINALISER, 'replay', str(long_bag),
+                           '--out', str(res / 'bag'), '--csv', str(res / 'e.csv')],
+                          capture_output=True, text=True, timeout=120, env=env, check=False)
+    assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
+    assert not res.exists(), listing(res)
+
+
 @pytest.mark.parametrize('group', [True, False])
 def test_ctrl_c_during_a_fleet_leaves_nothing(env, tmp_path, long_bag, group):
     import shutil

@@ -39,7 +39,7 @@ from ..physics.units import (
     MM_TO_M,
     rpm_to_rad_s,
 )
-from ..staging import sigint_ignored
+from ..staging import raise_if_interrupted, sigint_ignored, sigint_kept
 
 if TYPE_CHECKING:
     from ..table.friction_table import FrictionTable
@@ -464,10 +464,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C.
 
     """
+    sigint_kept()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-        return args.func(args)
+        code = args.func(args)
+        raise_if_interrupted()  # a Ctrl-C swallowed where nothing checked: still 130
+        return code
     except PumpFrictionError as exc:
         return _fail(str(exc))
     except BrokenPipeError:  # e.g. piped into head

@@ -50,7 +50,7 @@ from ..core.estimator import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
-from ..staging import remove_empty_folders, sigint_held
+from ..staging import raise_if_interrupted, remove_empty_folders, sigint_held
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',
            'plan_outputs', 'run_job', 'run_jobs']
@@ -355,6 +355,7 @@ def _run_local(jobs: list[ReplayJob], workers: int) -> list[ReplaySummary]:
                     break
             if not running:
                 return results  # type: ignore[return-value]
+            raise_if_interrupted()  # a Ctrl-C swallowed by a pipe's finaliser
             for ready in multiprocessing.connection.wait(list(running)):
                 conn = cast(Connection, ready)  # wait() returns the objects it was given
                 index, proc = running.pop(conn)

@@ -61,7 +61,14 @@ from ..errors import BagError
 from ..messages.conversions import diagnostic_array, outputs_of, rosbags_types
 from ..physics.model import efficiency_of
 from ..progress import ProgressBar
-from ..staging import looks_like_bag, looks_like_plots, sigint_held, Staged, StagedOutputs
+from ..staging import (
+    looks_like_bag,
+    looks_like_plots,
+    raise_if_interrupted,
+    sigint_held,
+    Staged,
+    StagedOutputs,
+)
 
 __all__ = ['CSV_COLUMNS', 'ReplayBatch', 'ReplayEvent', 'ReplaySummary', 'bag_estimates',
            'replay_bag', 'replay_batches', 'replay_events']
@@ -398,6 +405,7 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     period = round(1e9 / config.diagnostics_rate_hz) if write is not None else None
     with ProgressBar(f'replay {Path(summary.bag).name}', enabled=progress) as bar:
         for log_ns, estimates in replay_batches(source, core, period, bar):
+            raise_if_interrupted()  # a Ctrl-C swallowed by a finaliser stops us here
             if estimates is None:  # the node's diagnostics timer
                 if write is not None:
                     tick = log_ns[0]
