@@ -57,10 +57,11 @@ import math
 import numpy as np
 
 from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
-from .baseline import Baseline, baseline_regressors, BaselineLearner, N_TERMS
+from .baseline import Baseline, baseline_regressors, N_TERMS
 from .commissioning import Commissioning
 from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
+from .oil_follow import OilFollow
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
@@ -122,6 +123,7 @@ class WearMonitor(MonitorPersistence):
                                            0.5 * config.cusum_drift_nm,
                                            config.baseline_settle_time_constant_s)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
+        self._follow = OilFollow() if viscosity_assumed else None  # the oil thinning
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -132,6 +134,8 @@ class WearMonitor(MonitorPersistence):
         self.windows = 0
         self.commissioning.reset()
         self.baseline: Baseline | None = None
+        if self._follow is not None:
+            self._follow.reset()
         self.isolation.reset()
         self._reset_detection()
         self._open(0.0)
@@ -186,12 +190,12 @@ class WearMonitor(MonitorPersistence):
 
     @property
     def allowance_note(self) -> str:
-        """Return why a configured oil allowance has no effect, or '' (for /diagnostics)."""
-        if self._oil is None:
-            return ''
-        baseline = self.baseline
-        return self._oil.note(math.nan if baseline is None else baseline.temperature_c,
-                              baseline is not None)
+        """Return why an oil allowance has no effect, how far the oil was followed, or ''."""
+        baseline, follow = self.baseline, self._follow
+        notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
+                                baseline is not None) if self._oil is not None else '',
+                 follow.note() if follow is not None else '')
+        return '; '.join(x for x in notes if x)
 
     @property
     def learning(self) -> bool:
@@ -421,6 +425,13 @@ class WearMonitor(MonitorPersistence):
         self.isolation.add(sig, d, 1.0 / var, duration,
                            self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
+        if level > OK and self._follow is not None and self.cusum_neg_nm_s > self.cusum_pos_nm_s:
+            followed = self._follow.follow(self.isolation, self.fit)  # the oil thinning
+            if followed is not None:
+                self.baseline = followed
+                self.isolation.reset()
+                self._reset_detection()
+                return
         if level != self.level:
             if self.level == OK:
                 self.alarm_onset_s = t_s
@@ -431,21 +442,13 @@ class WearMonitor(MonitorPersistence):
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
 
-    @property
-    def learner(self) -> BaselineLearner:
-        """Return the commissioning's sums (all of its stationary windows)."""
-        return self.commissioning.learner
-
-    @property
-    def fit(self) -> Baseline:
-        """Return the commissioning's fit so far (the baseline, once complete)."""
-        return self.commissioning.fit
-
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
                t_s: float, temperature_c: float) -> None:
         """Add a commissioning window; complete the baseline once learnt and stationary."""
         if self.commissioning.add(h, e_nm, weight, duration_s, t_s, temperature_c):
             self.baseline = self.fit
+            if self._follow is not None:
+                self._follow.reset()
             self._reset_detection()
         else:
             self._publish_fit()

@@ -33,11 +33,13 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 
 from .attribution import CAUSES
+from .oil_follow import followed
 
 if TYPE_CHECKING:
     from .attribution import FaultIsolation
-    from .baseline import Baseline
+    from .baseline import Baseline, BaselineLearner
     from .commissioning import Commissioning
+    from .oil_follow import OilFollow
 
 __all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence', 'MonitorSettings', 'MonitorTrace']
 
@@ -98,10 +100,17 @@ class MonitorPersistence:
     _gain_allowance_nm_s: float
     _allowance_s: float
 
+    _follow: OilFollow | None
+
+    @property
+    def learner(self) -> BaselineLearner:
+        """Return the commissioning's sums (all of its stationary windows)."""
+        return self.commissioning.learner
+
     @property
     def fit(self) -> Baseline:
-        """Return the commissioning's baseline so far (defined by the monitor)."""
-        raise NotImplementedError
+        """Return the commissioning's fit so far (the baseline, once complete)."""
+        return self.commissioning.fit
 
     def _set_signatures(self) -> None:
         raise NotImplementedError
@@ -134,7 +143,8 @@ class MonitorPersistence:
                 'isolation': self.isolation.state(),
                 'allowance_nm_s': self._allowance_nm_s,
                 'gain_allowance_nm_s': self._gain_allowance_nm_s,
-                'allowance_s': self._allowance_s}
+                'allowance_s': self._allowance_s,
+                **({'oil_follow': self._follow.state()} if self._follow is not None else {})}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -169,6 +179,11 @@ class MonitorPersistence:
         self.samples = int(state['samples'])  # type: ignore[call-overload]
         self.windows = int(state['windows'])  # type: ignore[call-overload]
         self.baseline = self.fit if state['baseline_complete'] else None
+        if self._follow is not None:  # came later: a file without it has followed nothing
+            follow = state.get('oil_follow', {'factor': 1.0, 'times': 0})
+            self._follow.load(follow)  # type: ignore[arg-type]
+            if self.baseline is not None:
+                self.baseline = followed(self.baseline, self._follow.factor)
         ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
         pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)
