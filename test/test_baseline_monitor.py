@@ -138,6 +138,17 @@ def test_a_valve_plate_change_reads_oil_viscosity_too_when_the_viscosity_is_assu
         assert ('oil viscosity' in words) == assumed
 
 
+def test_another_friction_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed():
+    for assumed in (True, False):  # the bearing's drag follows the oil's viscosity too
+        mon = monitor(viscosity_assumed=assumed)
+        rng = np.random.default_rng(5)
+        t = run(mon, rng, 240, TRUTH)
+        run(mon, rng, 240, TRUTH, change=_changed('other_friction', 0.8), t0=t)
+        verdict, words = mon.verdict(1.0)
+        assert verdict == Verdict.OTHER_FRICTION
+        assert ('oil viscosity' in words) == assumed
+
+
 def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which():
     mon = monitor()
     rng = np.random.default_rng(6)

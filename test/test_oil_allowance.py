@@ -265,13 +265,13 @@ def test_a_drift_that_cannot_act_says_so_in_the_diagnostics(table):
     # with the topic, a baseline learnt without the oil temperature (an older file)
     measured = OilAllowance([0.0], [0.0], VG68, 1.2e-3)
     mon, _ = _warm_up(measured, 0.0, windows=400)
-    assert mon.allowance_note == ''
+    assert mon.oil_note == ''
     state = mon.state_dict()
     for part in ('learner', 'older', 'recent'):
         for key in ('temperature_sum_c_s', 'temperature_time_s'):
             del state['commissioning'][part][key]
     mon.load_state_dict(state)
-    assert 'until the baseline is learnt again' in mon.allowance_note
+    assert 'until the baseline is learnt again' in mon.oil_note
 
 
 def test_a_band_beyond_the_oil_law_is_refused_in_one_line_and_a_thin_oil_has_no_temperature(

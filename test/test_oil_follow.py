@@ -14,27 +14,37 @@
 
 """Without a temperature topic the baseline follows the oil down: windows of set truth."""
 
+import math
+
 import numpy as np
 from pump_friction_ros.core.attribution import Verdict
 from pump_friction_ros.core.baseline import Baseline, baseline_regressors
 from pump_friction_ros.core.monitor import OK, WARN
-from pump_friction_ros.core.oil_follow import followed
+from pump_friction_ros.core.oil_follow import followed, friction_fall, OilFollow
 import pytest
 
-from .test_baseline_monitor import _changed, monitor, run, TRUTH
+from .test_baseline_monitor import (
+    _changed,
+    DT,
+    monitor,
+    operating_points,
+    run,
+    TRUTH,
+    WINDOW_SAMPLES,
+)
 
 
-def thinning(mon, rng, t, to, steps=6, windows=120, then=None):
+def thinning(mon, rng, t, to, cause='valve_plate', steps=6, windows=120):
     """
-    Thin the oil: the valve plate's level falls in steps to ``to`` times the learnt one.
+    Thin the oil: one friction's level falls in steps to ``to`` times the learnt one.
 
-    Returns the time after it and the highest level seen (fed 4 windows at a time).
+    Returns the time after it and the highest level seen after any window.
     """
     highest = OK
     for k in range(1, steps + 1):
         factor = 1.0 + (to - 1.0) * k / steps
-        for _ in range(windows // 4):
-            t = run(mon, rng, 4, TRUTH, change=_changed('valve_plate', factor - 1.0), t0=t)
+        for _ in range(windows):
+            t = run(mon, rng, 1, TRUTH, change=_changed(cause, factor - 1.0), t0=t)
             highest = max(highest, mon.level)
     return t, highest
 
@@ -54,11 +64,22 @@ def test_without_temperature_topic_a_thinning_oil_lowers_the_baseline_and_raises
     follow = mon.state_dict()['oil_follow']
     assert highest == OK
     assert follow['times'] >= 1
-    # followed down to where the oil is, within the detection's reach of it
-    assert follow['factor'] == pytest.approx(0.6, abs=0.1)
-    assert 'lowered' in mon.allowance_note and 'oil thinning' in mon.allowance_note
+    # followed down to where the oil is, within the detection's reach of it; the other
+    # friction did not move
+    assert follow['valve_plate'] == pytest.approx(0.6, abs=0.1)
+    assert follow['other_friction'] == 1.0
+    assert 'lowered' in mon.oil_note and 'oil thinning' in mon.oil_note
     # the scale is relative to the followed baseline: the pump is healthy
     assert abs(mon.theta_vp - 1.0) < 1.96 * mon.valve_plate_scale_std
+
+
+def test_a_thinning_oil_that_shows_in_the_bearing_drag_lowers_the_other_friction():
+    mon, rng, t = commissioned(True, 25)
+    t, highest = thinning(mon, rng, t, 0.6, 'other_friction')
+    follow = mon.state_dict()['oil_follow']
+    assert highest == OK
+    assert follow['other_friction'] == pytest.approx(0.6, abs=0.1)
+    assert follow['valve_plate'] == 1.0
 
 
 def test_with_the_temperature_topic_the_same_fall_is_an_alarm():
@@ -71,7 +92,8 @@ def test_with_the_temperature_topic_the_same_fall_is_an_alarm():
 def test_wear_after_the_oil_thinned_is_detected_against_the_thinner_oil():
     mon, rng, t = commissioned(True, 22)
     t, _ = thinning(mon, rng, t, 0.6)
-    factor = mon.state_dict()['oil_follow']['factor']
+    factor = mon.state_dict()['oil_follow']['valve_plate']
+    assert factor == pytest.approx(0.6, abs=0.1)
     # valve plate x1.8 of where the oil now is (0.6 of the learnt level)
     run(mon, rng, 240, TRUTH, change=_changed('valve_plate', 0.6 * 1.8 - 1.0), t0=t)
     assert mon.level >= WARN
@@ -86,7 +108,7 @@ def test_a_fall_that_is_not_the_valve_plate_is_still_an_alarm(cause, size):
     run(mon, rng, 240, TRUTH, change=_changed(cause, size), t0=t)
     assert mon.level >= WARN
     assert mon.verdict(1.0)[0] == Verdict.NOT_FRICTION
-    assert mon.state_dict()['oil_follow'] == {'factor': 1.0, 'times': 0}
+    assert mon.state_dict()['oil_follow']['times'] == 0
 
 
 def test_a_rise_of_the_valve_plate_is_never_followed():
@@ -94,6 +116,23 @@ def test_a_rise_of_the_valve_plate_is_never_followed():
     run(mon, rng, 240, TRUTH, change=_changed('valve_plate', 0.4), t0=t)
     assert mon.level >= WARN
     assert mon.state_dict()['oil_follow']['times'] == 0
+    # named valve plate, and not a fall: nothing to follow whatever calls it
+    assert mon.verdict(1.0)[0] == Verdict.VALVE_PLATE
+    j, change = friction_fall(mon.isolation)
+    assert j == -1 and math.isnan(change)
+    assert OilFollow().follow(mon.isolation, mon.fit) is None
+
+
+def test_the_fall_followed_is_the_one_the_isolation_names():
+    mon, rng, t = commissioned(True, 21)
+    seen = []
+    for _ in range(240):  # valve plate at 0.6 at once: the fall as the isolation sees it
+        t = run(mon, rng, 1, TRUTH, change=_changed('valve_plate', -0.4), t0=t)
+        if mon.cusum_neg_nm_s > 0.0:
+            seen.append(friction_fall(mon.isolation))
+    named = [change for j, change in seen if j == 0]
+    assert named and all(-0.6 < change < -0.2 for change in named)
+    assert all(j in (-1, 0) for j, _ in seen)  # never the other friction
 
 
 def test_the_followed_baseline_survives_a_restart_and_a_reset_forgets_it():
@@ -109,24 +148,53 @@ def test_the_followed_baseline_survives_a_restart_and_a_reset_forgets_it():
     del older['oil_follow']
     again.load_state_dict(older)
     np.testing.assert_array_equal(again.baseline.coefficients, again.fit.coefficients)
-    bad = dict(state, oil_follow={'factor': 1.5, 'times': 1})
+    assert again.state_dict()['oil_follow']['times'] == 0 and again.oil_note == ''
+    bad = dict(state, oil_follow={'valve_plate': 1.5, 'other_friction': 1.0, 'times': 1})
     with pytest.raises(ValueError, match='malformed'):
         again.load_state_dict(bad)
     mon.reset()
-    assert mon.state_dict()['oil_follow'] == {'factor': 1.0, 'times': 0}
+    assert mon.state_dict()['oil_follow'] == {'valve_plate': 1.0, 'other_friction': 1.0,
+                                              'times': 0}
 
 
-def test_followed_scales_the_valve_plate_level_and_only_it():
+def test_followed_scales_the_friction_levels_and_nothing_else():
     rng = np.random.default_rng(7)
     coefficients = np.array([0.2, -0.1, 0.02, 0.01, 0.03, 1e-4])
     root = rng.normal(size=(6, 6)) * 0.01
     base = Baseline(coefficients, root @ root.T, 1e-4, 30.0)
-    assert followed(base, 1.0) is base
-    low = followed(base, 0.7)
+    assert followed(base, np.ones(2)) is base
+    low = followed(base, np.array([0.7, 0.9]))
     for _ in range(20):
         vp, other, th, a = rng.uniform(0.0, 1.0), rng.uniform(0.0, 1.0), rng.normal(), rng.normal()
         h = baseline_regressors(vp, other, th, 1.0, a)
-        # e_hat moves by the valve-plate level's change only: (0.7 - 1) l_vp T_vp
-        assert low.predict(h) - base.predict(h) == pytest.approx(-0.3 * 1.2 * vp)
-    h_vp = np.eye(6)[0]  # the valve-plate term alone
+        # e_hat moves by the friction levels' changes only: (f - 1) l T for each
+        assert low.predict(h) - base.predict(h) == pytest.approx(-0.3 * 1.2 * vp
+                                                                 - 0.1 * 0.9 * other)
+    h_vp, h_other, h_gain = np.eye(6)[0], np.eye(6)[1], np.eye(6)[4]
     assert low.prediction_var(h_vp) == pytest.approx(0.49 * base.prediction_var(h_vp))
+    assert low.prediction_var(h_other) == pytest.approx(0.81 * base.prediction_var(h_other))
+    assert low.prediction_var(h_gain) == base.prediction_var(h_gain)
+    assert low.prediction_var(h_vp + h_other) == pytest.approx(
+        0.49 * base.covariance[0, 0] + 0.81 * base.covariance[1, 1]
+        + 2 * 0.63 * base.covariance[0, 1])
+
+
+def test_the_chunk_path_follows_the_oil_as_the_sample_path_does():
+    rng = np.random.default_rng(26)
+    rows = []
+    vp, other, th_s, sign, a_s = operating_points(rng, 720)
+    for k in range(vp.size):  # commissioning, then the valve plate falling to 0.6
+        h = baseline_regressors(vp[k], other[k], th_s[k], sign[k], a_s[k])
+        fall = -0.4 * min(max(k - 240, 0) / 360, 1.0)
+        e = float(h @ TRUTH) + rng.normal(0.0, 0.01) + _changed('valve_plate', fall)(
+            vp[k], other[k], th_s[k], sign[k], a_s[k])
+        rows += [(len(rows) * DT, DT, e, vp[k], other[k], th_s[k] * sign[k], sign[k],
+                  a_s[k] * sign[k])] * WINDOW_SAMPLES
+    one, many = monitor(viscosity_assumed=True), monitor(viscosity_assumed=True)
+    for row in rows:
+        one.update(*row)
+    columns = [list(c) for c in zip(*rows, strict=True)]
+    many.update_many(*(c[:70_000] for c in columns))
+    many.update_many(*(c[70_000:] for c in columns))
+    assert one.state_dict()['oil_follow']['times'] >= 1
+    assert many.state_dict() == one.state_dict()

@@ -41,9 +41,10 @@ exp(z^2 / 2)). The noise variance in T is scaled by the lack of fit of the best 
 the lead is short and s_j and s_k are collinear over the points seen (|cos| >=
 ``identifiability_correlation``) these data cannot tell them apart and the verdict says so,
 naming both; where they are not collinear, more running will. A change of the oil's
-viscosity scales the valve plate's film shear exactly like wear: with the viscosity a
-parameter the valve-plate verdict reads "valve plate or oil viscosity"; with the temperature
-topic the model follows the viscosity and it does not.
+viscosity scales the valve plate's film shear exactly like wear, and the bearing's drag
+with it: with the viscosity a parameter the friction verdicts read "valve plate or oil
+viscosity" and "other friction or oil viscosity"; with the temperature topic the model
+follows the viscosity and they do not.
 
 The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standard
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
@@ -219,8 +220,8 @@ class FaultIsolation:
         ``attribution_z``, ``identifiability_correlation``, ``isolation_memory_s``,
         ``scale_systematic_std``.
     viscosity_assumed : bool
-        The viscosity is a parameter (no temperature topic): a valve-plate change may be
-        the oil's.
+        The viscosity is a parameter (no temperature topic): a friction change may be the
+        oil's.
 
     """
 
@@ -346,6 +347,9 @@ class FaultIsolation:
                         f'temperature topic) ({scale})')
         elif j == _OTHER:
             name = f'not the valve plate: other friction ({scale})'
+            if self.viscosity_assumed:  # the bearing's drag follows the oil too
+                name = ('not the valve plate: other friction or oil viscosity (the viscosity '
+                        f'is a parameter: no temperature topic) ({scale})')
         else:
             name = f'not friction: {name} {delta[j]:+.3g}' + (
                 ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else '')

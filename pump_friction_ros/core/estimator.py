@@ -461,7 +461,7 @@ class TorqueEstimator:
         """
         axis = self.table.viscosity_axis_m2_s
         extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
-        note = '; '.join(x for x in (note, self.monitor.allowance_note) if x)
+        note = '; '.join(x for x in (note, self.monitor.oil_note) if x)
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
                         self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
                         extra, note)

@@ -42,7 +42,9 @@ is dropped), and each window mean is one measurement:
    motoring.) WARN when max(S+, S-) reaches ``cusum_warn_nm_s``, ERROR at
    ``cusum_error_nm_s``; a level clears only below ``cusum_clear_ratio`` times its
    threshold (hysteresis). The sums are capped at `CUSUM_CAP_RATIO` times the ERROR
-   threshold. An EWMA of d gives the diagnostics a smoothed view.
+   threshold. An EWMA of d gives the diagnostics a smoothed view. Without the temperature
+   topic a fall of a friction, as the isolation names it, is the oil thinning: the baseline
+   follows it down instead of alarming (``oil_follow``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
    zero, and the valve-plate and other friction scales relative to the healthy pump.
 
@@ -189,7 +191,7 @@ class WearMonitor(MonitorPersistence):
         return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
 
     @property
-    def allowance_note(self) -> str:
+    def oil_note(self) -> str:
         """Return why an oil allowance has no effect, how far the oil was followed, or ''."""
         baseline, follow = self.baseline, self._follow
         notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
@@ -446,9 +448,7 @@ class WearMonitor(MonitorPersistence):
                t_s: float, temperature_c: float) -> None:
         """Add a commissioning window; complete the baseline once learnt and stationary."""
         if self.commissioning.add(h, e_nm, weight, duration_s, t_s, temperature_c):
-            self.baseline = self.fit
-            if self._follow is not None:
-                self._follow.reset()
+            self.baseline = self.fit  # (nothing followed: only `reset` leads back here)
             self._reset_detection()
         else:
             self._publish_fit()

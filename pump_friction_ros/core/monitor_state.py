@@ -126,7 +126,9 @@ class MonitorPersistence:
         Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
 
         The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
-        and the isolation's sums; not the open window (a fraction of a second).
+        the isolation's sums, and how far the friction baseline followed the oil
+        (``oil_follow``, where the viscosity is assumed); not the open window (a fraction
+        of a second).
 
         Returns
         -------
@@ -180,10 +182,10 @@ class MonitorPersistence:
         self.windows = int(state['windows'])  # type: ignore[call-overload]
         self.baseline = self.fit if state['baseline_complete'] else None
         if self._follow is not None:  # came later: a file without it has followed nothing
-            follow = state.get('oil_follow', {'factor': 1.0, 'times': 0})
-            self._follow.load(follow)  # type: ignore[arg-type]
-            if self.baseline is not None:
-                self.baseline = followed(self.baseline, self._follow.factor)
+            self._follow.reset()
+            if self.baseline is not None and 'oil_follow' in state:
+                self._follow.load(state['oil_follow'])  # type: ignore[arg-type]
+                self.baseline = followed(self.baseline, self._follow.factors)
         ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
         pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)

@@ -15,24 +15,28 @@
 """
 Without a temperature topic, the healthy baseline follows the oil down as it thins.
 
-With ``viscosity_source: parameter`` the model's oil keeps one viscosity, and the valve
-plate's film shear (rho nu omega / h over the lands, Hong & Doh 2004 sec. 4.2) follows the
-real oil, which no input shows: its change from commissioning reads as a valve-plate change.
-A cold start's oil goes on warming long after commissioning: the bank's slow warm-ups (tau
-490-880 s) were learnt at 1200-1440 s, where the commissioning's halves agreed, with 6-7 K
-still to come, and the valve plate then read 0.60-0.77 of healthy, in alarm
-(docs/monitor.md, "Other seeds").
+With ``viscosity_source: parameter`` the model's oil keeps one viscosity, and the real oil,
+which no input shows, moves the friction: the valve plate's film shear (rho nu omega / h
+over the lands, Hong & Doh 2004 sec. 4.2) is linear in the viscosity, and the bearing's
+drag rises with it (Palmgren's (nu n)^(2/3), eq. 10). Its change from commissioning reads
+as a friction change. A cold start's oil goes on warming long after commissioning: the
+bank's slow warm-ups (tau 490-880 s) were learnt at 660-1440 s, where the commissioning's
+halves agreed, with up to 7 K still to come, and the valve plate then read 0.60-0.77 of
+healthy, in alarm (docs/monitor.md).
 
-A *fall* of the valve plate's friction is, without the temperature, the oil thinning: the
-wear this monitor is for raises it (a plate losing its film runs into the Coulomb friction
-of eq. 9: more torque, not less), and a torque-measurement change has its own signature (the
-isolation tells it apart, ``attribution``). So where the detection would raise an alarm on
-the side below the baseline and the isolation names the valve plate (or oil viscosity) as
-falling, the baseline's valve-plate level is lowered to the fall's present value and
-detection starts afresh: no alarm, and /diagnostics says how far the baseline has followed
-the oil (`OilFollow.note`). A rise is never followed: wear, and oil colder than at
-commissioning (``oil_temperature_band_c``), stay what the monitor judges. With the
-temperature topic the model follows the viscosity itself and nothing here acts.
+A *fall* of a friction is, without the temperature, the oil thinning: the wear this
+monitor is for raises friction (a valve plate losing its film runs into the Coulomb
+friction of eq. 9; a worn bearing drags more), and a torque-measurement change has its own
+signature (the isolation tells it apart, ``attribution``). So where the detection would
+raise an alarm on the side below the baseline and the isolation names the valve plate or
+the other friction as falling, that friction's baseline level is lowered to the fall's
+present value (as the isolation estimates it when the alarm would be raised) and detection
+starts afresh: no alarm, and /diagnostics says how far the baseline has followed the oil
+(`OilFollow.note`). A rise is never followed: wear stays what the monitor judges, and so
+does oil that cools back after a follow (a pause, the next cold start: the followed levels
+are kept in the baseline file), which reads above the lowered baseline as "valve plate or
+oil viscosity"; following it back up would hide as much wear. With the temperature topic
+the model follows the viscosity itself and nothing here acts.
 """
 
 from __future__ import annotations
@@ -45,44 +49,46 @@ import numpy as np
 from .attribution import FaultIsolation
 from .baseline import Baseline
 
-__all__ = ['OilFollow', 'followed', 'valve_plate_fall']
+__all__ = ['FOLLOWED', 'OilFollow', 'followed', 'friction_fall']
 
-_VP = 0  # valve plate: first in `attribution.CAUSES` and `baseline.BASELINE_TERMS`
+FOLLOWED = ('valve_plate', 'other_friction')
+"""The frictions that follow the oil: the first two of `attribution.CAUSES` and of
+`baseline.BASELINE_TERMS` (their levels l = 1 + b)."""
 
 
-def followed(baseline: Baseline, factor: float) -> Baseline:
+def followed(baseline: Baseline, factors: np.ndarray) -> Baseline:
     """
-    Return the baseline with its valve-plate level times ``factor`` (the oil followed).
+    Return the baseline with its friction levels times ``factors`` (the oil followed).
 
-    The level l_vp = 1 + b_vp becomes factor l_vp; the covariance of b_vp scales by
-    factor^2 and its covariances with the other terms by factor.
+    Each level l = 1 + b of `FOLLOWED` becomes factor l; the covariance of the b's scales
+    by the product of their factors (1 for the other terms).
 
     Parameters
     ----------
     baseline : Baseline
         The learnt baseline.
-    factor : float
-        The valve-plate level's ratio to the learnt one (0 < factor <= 1) [-].
+    factors : ndarray
+        Each followed friction's level over the learnt one (0 < factor <= 1) [-].
 
     Returns
     -------
     Baseline
-        The baseline with the oil followed (the learnt one when factor is 1).
+        The baseline with the oil followed (the learnt one where every factor is 1).
 
     """
-    if factor == 1.0:
+    if np.all(factors == 1.0):
         return baseline
+    scale = np.ones(len(baseline.coefficients))
+    scale[:len(FOLLOWED)] = factors
     coefficients = baseline.coefficients.copy()
-    coefficients[_VP] = (1.0 + coefficients[_VP]) * factor - 1.0
-    scale = np.ones(len(coefficients))
-    scale[_VP] = factor
+    coefficients[:len(FOLLOWED)] = (1.0 + coefficients[:len(FOLLOWED)]) * factors - 1.0
     return dataclasses.replace(baseline, coefficients=coefficients,
                                covariance=baseline.covariance * np.outer(scale, scale))
 
 
-def valve_plate_fall(isolation: FaultIsolation) -> float:
+def friction_fall(isolation: FaultIsolation) -> tuple[int, float]:
     """
-    Return the valve plate's present relative fall where the isolation names it, else NaN.
+    Return the friction the isolation names falling, and its present relative change.
 
     Parameters
     ----------
@@ -91,44 +97,32 @@ def valve_plate_fall(isolation: FaultIsolation) -> float:
 
     Returns
     -------
-    float
-        The present relative change of the valve-plate level (< 0; of a change still
-        moving, the value its line reaches now), or NaN where the isolation does not name
-        the valve plate or its change is not a fall [-].
+    tuple
+        (index into `FOLLOWED`, change < 0: of a change still moving, the value its line
+        reaches now), or (-1, NaN) where the isolation names neither friction or its change
+        is not a fall.
 
     """
-    if isolation.verdict()[2] != _VP:
-        return math.nan
-    line = isolation.moving(_VP)
-    change = line[0] if line is not None else float(isolation.evidence()[1][_VP])
-    return change if change < 0.0 else math.nan
+    j = isolation.verdict()[2]
+    if not 0 <= j < len(FOLLOWED):
+        return -1, math.nan
+    line = isolation.moving(j)
+    change = line[0] if line is not None else float(isolation.evidence()[1][j])
+    return (j, change) if change < 0.0 else (-1, math.nan)
 
 
 class OilFollow:
-    """How far the baseline's valve-plate level has followed the oil down."""
+    """How far the baseline's friction levels have followed the oil down."""
 
     def __init__(self) -> None:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the following: the learnt level again (a new baseline)."""
-        self.factor = 1.0
-        """Valve-plate level over the learnt one [-]."""
+        """Forget the following: the learnt levels again (a new baseline)."""
+        self.factors = np.ones(len(FOLLOWED))
+        """Each followed friction's level over the learnt one [-]."""
         self.times = 0
         """Falls followed since the baseline was learnt."""
-
-    def take(self, change: float) -> None:
-        """
-        Follow a fall of the valve-plate level.
-
-        Parameters
-        ----------
-        change : float
-            Its relative change from the present baseline, -1 < change < 0 [-].
-
-        """
-        self.factor *= 1.0 + change
-        self.times += 1
 
     def follow(self, isolation: FaultIsolation, learnt: Baseline) -> Baseline | None:
         """
@@ -144,27 +138,31 @@ class OilFollow:
         Returns
         -------
         Baseline or None
-            The learnt baseline with the valve-plate level followed down, or None where
-            the change is not a fall of the valve plate (the alarm stands).
+            The learnt baseline with the friction levels followed down, or None where the
+            change is not a fall of a friction (the alarm stands).
 
         """
-        change = valve_plate_fall(isolation)
-        if not change > -1.0:  # NaN: not a named fall (a fall of all of it is no oil)
+        j, change = friction_fall(isolation)
+        if j < 0 or not change > -1.0:  # a fall of all of it is no oil
             return None
-        self.take(change)
-        return followed(learnt, self.factor)
+        self.factors[j] *= 1.0 + change
+        self.times += 1
+        return followed(learnt, self.factors)
 
     def note(self) -> str:
         """Return how far the baseline has followed the oil, or '' (for /diagnostics)."""
         if not self.times:
             return ''
-        return (f'valve-plate baseline lowered {self.times} times to {self.factor:.2f} of the '
-                'learnt level: without temperature topic its fall is taken as the oil '
-                'thinning, not a fault')
+        levels = ', '.join(f'{name.replace("_", " ")} {f:.2f}'
+                           for name, f in zip(FOLLOWED, self.factors.tolist(), strict=True))
+        times = 'once' if self.times == 1 else f'{self.times} times'
+        return (f'friction baseline lowered {times}, to {levels} of the learnt levels: '
+                'without temperature topic a fall of friction is taken as the oil thinning, '
+                'not a fault; oil cooling back reads above it')
 
     def state(self) -> dict[str, object]:
         """Return the following as plain values."""
-        return {'factor': self.factor, 'times': self.times}
+        return {**dict(zip(FOLLOWED, self.factors.tolist(), strict=True)), 'times': self.times}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -181,8 +179,8 @@ class OilFollow:
             A factor outside (0, 1] or a negative count.
 
         """
-        factor = float(state['factor'])  # type: ignore[arg-type]
+        factors = np.array([float(state[name]) for name in FOLLOWED])  # type: ignore[arg-type]
         times = int(state['times'])  # type: ignore[call-overload]
-        if not 0.0 < factor <= 1.0 or times < 0:
-            raise ValueError(f'oil follow factor {factor!r} or count {times!r}')
-        self.factor, self.times = factor, times
+        if not (np.all(factors > 0.0) and np.all(factors <= 1.0)) or times < 0:
+            raise ValueError(f'oil follow factors {factors.tolist()!r} or count {times!r}')
+        self.factors, self.times = factors, times
