@@ -127,25 +127,20 @@ def test_a_single_change_is_detected_and_named(cause, size, verdict):
         assert abs(mon.theta_vp - 1.8) < 1.96 * mon.valve_plate_scale_std < 0.3
 
 
-def test_a_valve_plate_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed():
-    for assumed in (True, False):
+FRICTION_VERDICTS = [('valve_plate', Verdict.VALVE_PLATE),
+                     ('other_friction', Verdict.OTHER_FRICTION)]
+
+
+@pytest.mark.parametrize(('cause', 'verdict'), FRICTION_VERDICTS)
+def test_a_friction_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed(
+        cause, verdict):
+    for assumed in (True, False):  # film shear and bearing drag follow the oil's viscosity
         mon = monitor(viscosity_assumed=assumed)
         rng = np.random.default_rng(5)
         t = run(mon, rng, 240, TRUTH)
-        run(mon, rng, 240, TRUTH, change=_changed('valve_plate', 0.8), t0=t)
-        verdict, words = mon.verdict(1.0)
-        assert verdict == Verdict.VALVE_PLATE
-        assert ('oil viscosity' in words) == assumed
-
-
-def test_another_friction_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed():
-    for assumed in (True, False):  # the bearing's drag follows the oil's viscosity too
-        mon = monitor(viscosity_assumed=assumed)
-        rng = np.random.default_rng(5)
-        t = run(mon, rng, 240, TRUTH)
-        run(mon, rng, 240, TRUTH, change=_changed('other_friction', 0.8), t0=t)
-        verdict, words = mon.verdict(1.0)
-        assert verdict == Verdict.OTHER_FRICTION
+        run(mon, rng, 240, TRUTH, change=_changed(cause, 0.8), t0=t)
+        got, words = mon.verdict(1.0)
+        assert got == verdict
         assert ('oil viscosity' in words) == assumed
 
 
