@@ -503,10 +503,13 @@ def test_a_ctrl_c_that_lands_in_a_finaliser_still_interrupts_and_leaves_nothing(
         env, tmp_path, long_bag):
     # CI, f314839: the Ctrl-C landed in a multiprocessing Connection's __del__, where Python
     # prints a KeyboardInterrupt and goes on: the replay ran to its end and committed (exit 0)
+    import signal
     res = tmp_path / 'res'
     proc = subprocess.run([sys.executable, '-c', CTRL_C_IN_A_FINALISER, 'replay', str(long_bag),
                            '--out', str(res / 'bag'), '--csv', str(res / 'e.csv')],
-                          capture_output=True, text=True, timeout=120, env=env, check=False)
+                          capture_output=True, text=True, timeout=120, env=env, check=False,
+                          # as in a terminal: a runner in the background ignores Ctrl-C
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
     assert not res.exists(), listing(res)
 
