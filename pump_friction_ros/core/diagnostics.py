@@ -145,6 +145,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         key = f'baseline_{name}_scale' if relative else f'baseline_{name}'
         values += [(key, float(value) + (1.0 if relative else 0.0)), (f'{key}_std', float(std))]
     values.append(('baseline_window_std_nm', math.sqrt(fit.window_var_nm2)))
+    # the torque reads this times the oil's warming since commissioning high: learnt drift
+    values.append(('baseline_torque_drift_per_k', mon.measurement_drift_per_k))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values += [(name, counts[name]) for name in COUNTERS]
     values += extra

@@ -44,7 +44,9 @@ is dropped), and each window mean is one measurement:
    threshold (hysteresis). The sums are capped at `CUSUM_CAP_RATIO` times the ERROR
    threshold. An EWMA of d gives the diagnostics a smoothed view. Without the temperature
    topic a fall of a friction, as the isolation names it, is the oil thinning: the baseline
-   follows it down instead of alarming (``oil_follow``).
+   follows it down instead of alarming (``oil_follow``); with it, a gain change of the
+   torque measurement reading high as the oil warms is its drift, learnt instead
+   (``gain_follow``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
    zero, and the valve-plate and other friction scales relative to the healthy pump.
 
@@ -58,9 +60,11 @@ import math
 
 import numpy as np
 
-from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix, Verdict
+from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix
 from .baseline import Baseline, baseline_regressors, N_TERMS
 from .commissioning import Commissioning
+from .gain_follow import GainFollow
+from .monitor_report import MonitorReport
 from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
 from .oil_follow import OilFollow
@@ -79,7 +83,7 @@ MIN_WINDOW_SAMPLES = 10
 measurement: its mean would carry more of the reversal than of the steady friction."""
 
 
-class WearMonitor(MonitorPersistence):
+class WearMonitor(MonitorPersistence, MonitorReport):
     """
     Stateful wear monitor; feed it one settled friction-direction sample at a time.
 
@@ -126,6 +130,8 @@ class WearMonitor(MonitorPersistence):
                                            config.baseline_settle_time_constant_s)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self._follow = OilFollow() if viscosity_assumed else None  # the oil thinning
+        self._gain_follow = None if viscosity_assumed else GainFollow(  # the drive's k_t
+            config.torque_constant_drift_max_per_k)
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -136,8 +142,9 @@ class WearMonitor(MonitorPersistence):
         self.windows = 0
         self.commissioning.reset()
         self.baseline: Baseline | None = None
-        if self._follow is not None:
-            self._follow.reset()
+        for follow in (self._follow, self._gain_follow):
+            if follow is not None:
+                follow.reset()
         self.isolation.reset()
         self._reset_detection()
         self._open(0.0)
@@ -163,72 +170,6 @@ class WearMonitor(MonitorPersistence):
         self._time = 0.0
         self._se = self._svp = self._so = self._sth = self._sa = 0.0
         self._sw = self._sv = 0.0  # |speed| and viscosity: the oil allowances
-
-    @property
-    def residual_std_nm(self) -> float:
-        """Return the running standard deviation of the change from the baseline [N m]."""
-        return math.sqrt(self._var)
-
-    @property
-    def undetectable_change(self) -> dict[str, float]:
-        """
-        Return, per cause, the largest relative change the detection does not see.
-
-        A change delta of cause j moves its CUSUM's input by about delta times the RMS of
-        its signature over commissioning's points, less the margin taken off the change
-        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std, and
-        the oil allowance's mean over the windows since): below the allowance k it never
-        sums. A reported scale holds it in its interval
-        while no change is under way. Zero before the baseline is learnt.
-
-        Returns
-        -------
-        dict
-            Cause (`attribution.CAUSES`) -> relative change [-] (torque offset and drive
-            loss: [N m]).
-
-        """
-        return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
-
-    @property
-    def oil_note(self) -> str:
-        """Return why an oil allowance has no effect, how far the oil was followed, or ''."""
-        baseline, follow = self.baseline, self._follow
-        notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
-                                baseline is not None) if self._oil is not None else '',
-                 follow.note() if follow is not None else '')
-        return '; '.join(x for x in notes if x)
-
-    @property
-    def learning(self) -> bool:
-        """Whether the healthy baseline is still being learnt (no alarm meanwhile)."""
-        return self.baseline is None
-
-    def baseline_status(self) -> str:
-        """Return the baseline's state in words (for /diagnostics)."""
-        if self.baseline is None:
-            return f'{self.commissioning.status()}; no alarm until then'
-        return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
-
-    def verdict(self, side: float) -> tuple[str, str]:
-        """
-        Return what explains the change on one side of the baseline, and the phrase.
-
-        Parameters
-        ----------
-        side : float
-            +1: torque above the baseline, -1: below.
-
-        Returns
-        -------
-        tuple of str
-            (`attribution.Verdict` value, explanation for the status message).
-
-        """
-        if self.baseline is None:
-            return Verdict.NONE, self.baseline_status()
-        verdict, words, _ = self.isolation.verdict()
-        return verdict, words
 
     # -- samples --------------------------------------------------------------------------
 
@@ -390,7 +331,10 @@ class WearMonitor(MonitorPersistence):
         if baseline is None:
             self._learn(h, e, weight, duration, t_s, temperature)
             return
+        sig = self._m @ h
         d = e - baseline.predict(h)
+        if self._gain_follow is not None:  # the measurement's drift learnt (``gain_follow``)
+            d -= self._gain_follow.term_nm(sig, temperature, baseline.temperature_c)
         prediction_var = baseline.prediction_var(h)
         var = baseline.window_var_nm2 / weight + prediction_var
         a = 1.0 - math.exp(-duration / self._tau)
@@ -417,7 +361,6 @@ class WearMonitor(MonitorPersistence):
         high += margin
         low -= margin
         shrunk = d - high if d > high else (d - low if d < low else 0.0)
-        sig = self._m @ h
         z = sig * shrunk / self._norm
         k, cap = self._k, self._cap
         self._pos = np.clip(self._pos + (z - k) * duration, 0.0, cap)
@@ -427,13 +370,10 @@ class WearMonitor(MonitorPersistence):
         self.isolation.add(sig, d, 1.0 / var, duration,
                            self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
-        if level > OK and self._follow is not None and self.cusum_neg_nm_s > self.cusum_pos_nm_s:
-            followed = self._follow.follow(self.isolation, self.fit)  # the oil thinning
-            if followed is not None:
-                self.baseline = followed
-                self.isolation.reset()
-                self._reset_detection()
-                return
+        if level > OK and self._followed(temperature, baseline.temperature_c):
+            self.isolation.reset()
+            self._reset_detection()
+            return
         if level != self.level:
             if self.level == OK:
                 self.alarm_onset_s = t_s
@@ -443,6 +383,16 @@ class WearMonitor(MonitorPersistence):
         self._undetectable = self._unseen(self._allowance_s)
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
+
+    def _followed(self, temperature_c: float, reference_c: float) -> bool:
+        """Follow a change that is the oil's, not the pump's; return whether (no alarm)."""
+        if self._follow is not None and self.cusum_neg_nm_s > self.cusum_pos_nm_s:
+            followed = self._follow.follow(self.isolation, self.fit)  # the oil thinning
+            if followed is not None:
+                self.baseline = followed
+            return followed is not None
+        return self._gain_follow is not None and self._gain_follow.follow(
+            self.isolation, temperature_c, reference_c)
 
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
                t_s: float, temperature_c: float) -> None:

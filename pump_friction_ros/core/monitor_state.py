@@ -39,6 +39,7 @@ if TYPE_CHECKING:
     from .attribution import FaultIsolation
     from .baseline import Baseline, BaselineLearner
     from .commissioning import Commissioning
+    from .gain_follow import GainFollow
     from .oil_follow import OilFollow
 
 __all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence', 'MonitorSettings', 'MonitorTrace']
@@ -70,6 +71,7 @@ class MonitorSettings:
     cusum_clear_ratio: float
     baseline_learn_s: float
     baseline_settle_time_constant_s: float
+    torque_constant_drift_max_per_k: float
 
 
 class MonitorPersistence:
@@ -101,6 +103,7 @@ class MonitorPersistence:
     _allowance_s: float
 
     _follow: OilFollow | None
+    _gain_follow: GainFollow | None
 
     @property
     def learner(self) -> BaselineLearner:
@@ -127,8 +130,9 @@ class MonitorPersistence:
 
         The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
         the isolation's sums, and how far the friction baseline followed the oil
-        (``oil_follow``, where the viscosity is assumed); not the open window (a fraction
-        of a second).
+        (``oil_follow``, where the viscosity is assumed) or the gain the drive's drift
+        (``gain_follow``, where it is measured); not the open window (a fraction of a
+        second).
 
         Returns
         -------
@@ -146,7 +150,9 @@ class MonitorPersistence:
                 'allowance_nm_s': self._allowance_nm_s,
                 'gain_allowance_nm_s': self._gain_allowance_nm_s,
                 'allowance_s': self._allowance_s,
-                **({'oil_follow': self._follow.state()} if self._follow is not None else {})}
+                **({'oil_follow': self._follow.state()} if self._follow is not None else {}),
+                **({'gain_follow': self._gain_follow.state()}
+                   if self._gain_follow is not None else {})}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -186,6 +192,10 @@ class MonitorPersistence:
             if self.baseline is not None and 'oil_follow' in state:
                 self._follow.load(state['oil_follow'])  # type: ignore[arg-type]
                 self.baseline = followed(self.baseline, self._follow.factors)
+        if self._gain_follow is not None:  # came later too: a file without it learnt none
+            self._gain_follow.reset()
+            if self.baseline is not None and 'gain_follow' in state:
+                self._gain_follow.load(state['gain_follow'])  # type: ignore[arg-type]
         ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
         pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)

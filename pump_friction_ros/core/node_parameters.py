@@ -19,6 +19,10 @@ The node declares every parameter below with a ``ParameterDescriptor`` built fro
 (description and range); the replay reads the same ROS 2 parameters file
 (``torque_estimator: ros__parameters: ...``); both validate into the same frozen
 `EstimatorConfig`, which the ROS-free core takes.
+
+Longer than 500 lines because it is the one list of every parameter, each with its default,
+range and description: the node, the YAML file and the docs read them from here, and a
+parameter split off into another module would be one more place to look for it.
 """
 
 from __future__ import annotations
@@ -210,6 +214,10 @@ class EstimatorConfig:
         '(NdFeB: 1.2e-3); times the temperature change from commissioning (topic, else the '
         'band) times the torque, on its side, it is not a change of the pump, and hides one '
         'as large (docs/monitor.md); 0: none, the drive compensates.', 0.0, 0.1)
+    torque_constant_drift_max_per_k: float = _param(
+        1.5e-3, "Temperature topic: the largest drift of the drive's torque constant the "
+        'monitor learns (a gain change reading high as the oil warms is followed, not '
+        'alarmed) [1/K] (NdFeB 0.8-1.3e-3; ferrite 2e-3); 0: never.', 0.0, 0.1)
     attribution_window_s: float = _param(
         0.25, 'Monitored running averaged into one measurement of the baseline and the '
         'isolation [s].', 0.01, 60.0)

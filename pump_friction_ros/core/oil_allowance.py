@@ -33,8 +33,10 @@ warmer or cooler, and two things move the torque though nothing wore:
    ``torque_constant_drift_per_k`` times the temperature change times the torque: 4-5 %
    over a cold start. Measured on the bank's cold start with the topic, seed 1: a drive
    drifting 0.94e-3 / K, commissioned at 23 degC, went to ERROR (not friction) as the oil
-   reached 57 degC. With the topic the change is the oil temperature's from commissioning's
-   mean (the oil standing for the flanged motor's); without it, the band, either way. The
+   reached 57 degC (``gain_follow`` now learns such a drift where it shows; this
+   allowance is for a drift known beforehand, or without the topic, over the band). With
+   the topic the change is the oil temperature's from commissioning's mean (the oil
+   standing for the flanged motor's); without it, the band, either way. The
    drift is one-sided (`OilAllowance.gain_interval_nm`): warmer, a pumping window reads high
    and a motoring one low. In each window only its own side is allowed, so wear, which adds
    friction in both, keeps its full sensitivity in the windows whose drift goes the other

@@ -1,0 +1,124 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+What the wear monitor tells: its verdict, its baseline's state, what it cannot see.
+
+`MonitorReport` is the read-only part of ``monitor.WearMonitor`` that the diagnostics and
+the published scales read (a mixin, as ``monitor_state.MonitorPersistence`` is its
+persistence).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .attribution import CAUSES, Verdict
+
+if TYPE_CHECKING:
+    from .attribution import FaultIsolation
+    from .baseline import Baseline
+    from .commissioning import Commissioning
+    from .gain_follow import GainFollow
+    from .oil_allowance import OilAllowance
+    from .oil_follow import OilFollow
+
+__all__ = ['MonitorReport']
+
+
+class MonitorReport:
+    """The wear monitor's verdict and state in words (a mixin of ``WearMonitor``)."""
+
+    baseline: Baseline | None
+    commissioning: Commissioning
+    isolation: FaultIsolation
+    _var: float
+    _undetectable: np.ndarray
+    _oil: OilAllowance | None
+    _follow: OilFollow | None
+    _gain_follow: GainFollow | None
+
+    @property
+    def residual_std_nm(self) -> float:
+        """Return the running standard deviation of the change from the baseline [N m]."""
+        return math.sqrt(self._var)
+
+    @property
+    def undetectable_change(self) -> dict[str, float]:
+        """
+        Return, per cause, the largest relative change the detection does not see.
+
+        A change delta of cause j moves its CUSUM's input by about delta times the RMS of
+        its signature over commissioning's points, less the margin taken off the change
+        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std, and
+        the oil allowance's mean over the windows since): below the allowance k it never
+        sums. A reported scale holds it in its interval
+        while no change is under way. Zero before the baseline is learnt.
+
+        Returns
+        -------
+        dict
+            Cause (`attribution.CAUSES`) -> relative change [-] (torque offset and drive
+            loss: [N m]).
+
+        """
+        return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
+
+    @property
+    def oil_note(self) -> str:
+        """Return why an oil allowance has no effect, how far the oil was followed, or ''."""
+        baseline = self.baseline
+        notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
+                                baseline is not None) if self._oil is not None else '',
+                 *(f.note() for f in (self._follow, self._gain_follow) if f is not None))
+        return '; '.join(x for x in notes if x)
+
+    @property
+    def measurement_drift_per_k(self) -> float:
+        """Return the learnt drift of the torque against the pressure (``gain_follow``) [1/K]."""
+        return math.nan if self._gain_follow is None else self._gain_follow.drift_per_k
+
+    @property
+    def learning(self) -> bool:
+        """Whether the healthy baseline is still being learnt (no alarm meanwhile)."""
+        return self.baseline is None
+
+    def baseline_status(self) -> str:
+        """Return the baseline's state in words (for /diagnostics)."""
+        if self.baseline is None:
+            return f'{self.commissioning.status()}; no alarm until then'
+        return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
+
+    def verdict(self, side: float) -> tuple[str, str]:
+        """
+        Return what explains the change on one side of the baseline, and the phrase.
+
+        Parameters
+        ----------
+        side : float
+            +1: torque above the baseline, -1: below.
+
+        Returns
+        -------
+        tuple of str
+            (`attribution.Verdict` value, explanation for the status message).
+
+        """
+        if self.baseline is None:
+            return Verdict.NONE, self.baseline_status()
+        verdict, words, _ = self.isolation.verdict()
+        return verdict, words

@@ -1,0 +1,199 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""With the temperature topic the baseline learns the drive's k_t drift: warm-ups of set truth."""
+
+import math
+
+import numpy as np
+from pump_friction_ros.core.attribution import AttributionSettings, CAUSES, Verdict
+from pump_friction_ros.core.baseline import baseline_regressors
+from pump_friction_ros.core.gain_follow import GainFollow
+from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
+from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
+from pump_friction_ros.core.oil_allowance import OilAllowance
+import pytest
+
+from .test_oil_allowance import DT, TRUTH, VG68, WINDOW_SAMPLES
+
+MEASURED = OilAllowance([0.0], [0.0], VG68)  # the temperature topic, no allowance
+NOTHING = {'torque_gain_per_k': 0.0, 'pressure_gain_per_k': 0.0, 'times': 0}
+
+
+def _monitor(assumed=False, **overrides):
+    config = EstimatorConfig(**overrides)
+    return WearMonitor(settings_view(config, MonitorSettings),
+                       settings_view(config, AttributionSettings), 0.0, assumed, 0.0,
+                       MEASURED)
+
+
+def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_from_s=math.inf,
+         pressure=False):
+    """
+    Commission at 20 degC, then warm the oil to 55 degC (from 500 s, tau 300 s of wall time).
+
+    The measured torque reads drift_per_k (T - 20 degC) high: the drive's k_t. From 1500 s of
+    wall time (the oil at 53 degC) the gain is ``gain_step`` off besides, and from 700 s the
+    valve plate is ``wear`` times healthy. From ``cool_from_s`` the oil cools back to 20 degC
+    (tau 300 s). ``pressure``: the drift is the pressure sensor's, reading low as it warms
+    (the theoretical torque's part only). Returns the first alarm's verdict ('' if none).
+    """
+    rng = np.random.default_rng(seed)
+    t, verdict, n = 0.0, '', WINDOW_SAMPLES
+    for _ in range(windows):
+        wall = 10.0 * t  # monitored running is a tenth of the time
+        temperature = 20.0 if wall < 500.0 else 55.0 - 35.0 * math.exp(-(wall - 500.0) / 300.0)
+        if wall > cool_from_s:
+            temperature = 20.0 + (temperature - 20.0) * math.exp(-(wall - cool_from_s) / 300.0)
+        speed = rng.uniform(50.0, 900.0)
+        vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
+        sign = 1.0 if rng.random() < 0.5 else -1.0
+        th = rng.uniform(-8.0, 8.0)  # 60-120 bar: a 3 % gain error is 0.2-0.45 N m
+        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
+        delivered = th * sign + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other + TRUTH[2]
+        gain = drift_per_k * (temperature - 20.0) + (gain_step if wall > 1500.0 else 0.0)
+        e = float(h @ TRUTH) + gain * (th * sign if pressure else delivered)
+        if wall > 700.0:
+            e += (wear - 1.0) * (1 + TRUTH[0]) * vp
+        e += rng.normal(0.0, 0.01)
+        trace = mon.update_many([t + i * DT for i in range(n)], [DT] * n, [e] * n, [vp] * n,
+                                [other] * n, [th] * n, [sign] * n, None, [speed] * n,
+                                [VG68(temperature)] * n)
+        if not verdict and max(trace.level) > OK:
+            verdict = mon.verdict(1.0)[0]
+        t += n * DT
+    return verdict
+
+
+@pytest.mark.parametrize('seed', [31, 32, 33])
+@pytest.mark.parametrize('drift_per_k', [0.4e-3, 0.9e-3, 1.3e-3])
+def test_a_torque_constant_drifting_as_the_oil_warms_is_learnt_and_raises_no_alarm(
+        seed, drift_per_k):
+    mon = _monitor()
+    assert warm(mon, drift_per_k, seed) == ''
+    assert not mon.learning and mon.baseline.temperature_c == pytest.approx(20.0)
+    assert mon.state_dict()['gain_follow']['times'] >= 1
+    # learnt where the detection first saw it, within what the CUSUM allowance hides:
+    # k / (35 K x ~4 N m) = 0.2e-3 / K
+    assert mon.measurement_drift_per_k == pytest.approx(drift_per_k, abs=0.3e-3)
+    assert 'measured torque against pressure follows the oil temperature' in mon.oil_note
+    # with nothing learnt the same warm-up is an alarm, as a change of the measurement
+    never = _monitor(torque_constant_drift_max_per_k=0.0)
+    assert warm(never, drift_per_k, seed) == Verdict.NOT_FRICTION
+    assert never.state_dict()['gain_follow']['times'] == 0 and never.oil_note == ''
+
+
+def test_a_pressure_sensor_reading_low_as_it_warms_is_learnt_as_the_same_drift():
+    mon = _monitor()
+    assert warm(mon, 0.9e-3, 38, pressure=True) == ''
+    learnt = mon.state_dict()['gain_follow']
+    # the pressure gain's own signature: T_th s alone, without the friction's part
+    assert learnt['pressure_gain_per_k'] == pytest.approx(-0.9e-3, abs=0.3e-3)
+    assert learnt['torque_gain_per_k'] == 0.0
+    never = _monitor(torque_constant_drift_max_per_k=0.0)
+    assert warm(never, 0.9e-3, 38, pressure=True) == Verdict.NOT_FRICTION
+
+
+def test_the_learnt_drift_follows_the_oil_as_it_cools_back():
+    mon = _monitor()
+    # warm to 55 degC, then back to 20 degC from 3000 s: the k_t returns, so does the reading
+    assert warm(mon, 1.0e-3, 34, windows=6000, cool_from_s=3000.0) == ''
+    assert mon.state_dict()['gain_follow']['times'] >= 1
+    assert mon.level == OK
+
+
+def test_a_torque_constant_reading_low_as_the_oil_warms_is_an_alarm():
+    mon = _monitor()
+    assert warm(mon, -1.0e-3, 35) == Verdict.NOT_FRICTION  # not the drift of a magnet
+    assert mon.state_dict()['gain_follow'] == NOTHING
+
+
+@pytest.mark.parametrize('step', [-0.05, 0.08])
+def test_a_gain_change_beyond_the_drift_on_a_warm_pump_is_an_alarm(step):
+    # the drive's 1e-3 / K (no alarm alone: above), then on the warm pump (53 degC, 33 K
+    # above commissioning) a torque constant 5 % low, or 8 % high: 1e-3 + 0.08 / 33 K is
+    # beyond the largest drift, 1.5e-3 / K
+    mon = _monitor()
+    assert warm(mon, 1.0e-3, 31, gain_step=step) == Verdict.NOT_FRICTION
+    assert mon.measurement_drift_per_k <= 1.5e-3
+    assert mon.alarm_onset_s > 150.0  # 1500 s of wall time: after the step
+
+
+@pytest.mark.parametrize('seed', [37, 38, 39])
+def test_valve_plate_wear_during_the_warm_up_is_found_and_named_not_followed(seed):
+    mon = _monitor()
+    warm(mon, 1.0e-3, seed, wear=1.8)  # from 37 degC on, while the drift still grows
+    assert mon.level > OK
+    assert mon.verdict(1.0)[0] == Verdict.VALVE_PLATE
+    assert abs(mon.theta_vp - 1.8) < 1.96 * mon.valve_plate_scale_std < 0.3
+    assert mon.measurement_drift_per_k <= 1.5e-3
+
+
+def test_the_learnt_drift_survives_a_restart_and_a_reset_forgets_it():
+    mon = _monitor()
+    warm(mon, 1.0e-3, 31)
+    state = mon.state_dict()
+    again = _monitor()
+    again.load_state_dict(state)
+    assert again.state_dict() == state
+    assert again.measurement_drift_per_k == mon.measurement_drift_per_k > 0.0
+    mon.reset()
+    assert mon.state_dict()['gain_follow'] == NOTHING
+
+
+def test_a_state_saved_before_the_gain_follow_loads_with_nothing_learnt():
+    mon = _monitor()
+    warm(mon, 1.0e-3, 31)
+    state = mon.state_dict()
+    del state['gain_follow']
+    again = _monitor()
+    again.load_state_dict(state)
+    assert not again.learning and again.state_dict()['gain_follow'] == NOTHING
+
+
+@pytest.mark.parametrize('bad', [
+    {**NOTHING, 'torque_gain_per_k': -1e-4}, {**NOTHING, 'pressure_gain_per_k': 1e-4},
+    {**NOTHING, 'torque_gain_per_k': math.nan}, {**NOTHING, 'times': -1}, {'times': 1}])
+def test_a_bad_learnt_drift_is_refused_and_changes_nothing(bad):
+    mon = _monitor()
+    warm(mon, 1.0e-3, 31)
+    state = mon.state_dict()
+    before = mon.state_dict()
+    with pytest.raises(ValueError, match='malformed monitor state'):
+        mon.load_state_dict({**state, 'gain_follow': bad})
+    assert mon.state_dict() == before
+
+
+def test_a_drift_above_a_lowered_largest_drift_loads_scaled_to_the_largest():
+    follow = GainFollow(0.5e-3)
+    follow.load({'torque_gain_per_k': 0.8e-3, 'pressure_gain_per_k': -0.4e-3, 'times': 2})
+    assert follow.drift_per_k == pytest.approx(0.5e-3)
+    assert follow.per_k.tolist() == pytest.approx([0.8e-3 / 2.4, -0.4e-3 / 2.4])
+    assert follow.times == 2
+
+
+def test_without_temperature_topic_nothing_is_learnt():
+    mon = _monitor(assumed=True)
+    assert 'gain_follow' not in mon.state_dict()
+    assert math.isnan(mon.measurement_drift_per_k)  # /diagnostics: not learnt, not zero
+    # the drift's term needs both temperatures: none where either is not known
+    follow = GainFollow(1.5e-3)
+    follow.per_k[:] = [1e-3, -0.5e-3]
+    signatures = np.zeros(len(CAUSES))
+    signatures[CAUSES.index('torque_gain')] = 4.0
+    signatures[CAUSES.index('pressure_gain')] = -3.5
+    assert follow.term_nm(signatures, math.nan, 20.0) == 0.0
+    assert follow.term_nm(signatures, 30.0, math.nan) == 0.0
+    # 10 K: 1e-3 x 10 x 4 N m + (-0.5e-3) x 10 x (-3.5 N m)
+    assert follow.term_nm(signatures, 30.0, 20.0) == pytest.approx(0.04 + 0.0175)
