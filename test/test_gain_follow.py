@@ -18,14 +18,13 @@ import math
 
 import numpy as np
 from pump_friction_ros.core.attribution import AttributionSettings, CAUSES, Verdict
-from pump_friction_ros.core.baseline import baseline_regressors
 from pump_friction_ros.core.gain_follow import GainFollow
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
 from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
 from pump_friction_ros.core.oil_allowance import OilAllowance
 import pytest
 
-from .test_oil_allowance import DT, TRUTH, VG68, WINDOW_SAMPLES
+from .test_oil_allowance import VG68, warm
 
 MEASURED = OilAllowance([0.0], [0.0], VG68)  # the temperature topic, no allowance
 NOTHING = {'torque_gain_per_k': 0.0, 'pressure_gain_per_k': 0.0, 'times': 0}
@@ -36,44 +35,6 @@ def _monitor(assumed=False, **overrides):
     return WearMonitor(settings_view(config, MonitorSettings),
                        settings_view(config, AttributionSettings), 0.0, assumed, 0.0,
                        MEASURED)
-
-
-def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_from_s=math.inf,
-         pressure=False):
-    """
-    Commission at 20 degC, then warm the oil to 55 degC (from 500 s, tau 300 s of wall time).
-
-    The measured torque reads drift_per_k (T - 20 degC) high: the drive's k_t. From 1500 s of
-    wall time (the oil at 53 degC) the gain is ``gain_step`` off besides, and from 700 s the
-    valve plate is ``wear`` times healthy. From ``cool_from_s`` the oil cools back to 20 degC
-    (tau 300 s). ``pressure``: the drift is the pressure sensor's, reading low as it warms
-    (the theoretical torque's part only). Returns the first alarm's verdict ('' if none).
-    """
-    rng = np.random.default_rng(seed)
-    t, verdict, n = 0.0, '', WINDOW_SAMPLES
-    for _ in range(windows):
-        wall = 10.0 * t  # monitored running is a tenth of the time
-        temperature = 20.0 if wall < 500.0 else 55.0 - 35.0 * math.exp(-(wall - 500.0) / 300.0)
-        if wall > cool_from_s:
-            temperature = 20.0 + (temperature - 20.0) * math.exp(-(wall - cool_from_s) / 300.0)
-        speed = rng.uniform(50.0, 900.0)
-        vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
-        sign = 1.0 if rng.random() < 0.5 else -1.0
-        th = rng.uniform(-8.0, 8.0)  # 60-120 bar: a 3 % gain error is 0.2-0.45 N m
-        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
-        delivered = th * sign + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other + TRUTH[2]
-        gain = drift_per_k * (temperature - 20.0) + (gain_step if wall > 1500.0 else 0.0)
-        e = float(h @ TRUTH) + gain * (th * sign if pressure else delivered)
-        if wall > 700.0:
-            e += (wear - 1.0) * (1 + TRUTH[0]) * vp
-        e += rng.normal(0.0, 0.01)
-        trace = mon.update_many([t + i * DT for i in range(n)], [DT] * n, [e] * n, [vp] * n,
-                                [other] * n, [th] * n, [sign] * n, None, [speed] * n,
-                                [VG68(temperature)] * n)
-        if not verdict and max(trace.level) > OK:
-            verdict = mon.verdict(1.0)[0]
-        t += n * DT
-    return verdict
 
 
 @pytest.mark.parametrize('seed', [31, 32, 33])

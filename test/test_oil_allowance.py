@@ -169,27 +169,32 @@ def test_gain_allowance_is_one_sided_the_drift_times_the_temperature_change_time
     assert math.isnan(OilAllowance([0.0], [0.0]).temperature_c(VG68(57.0)))  # assumed
 
 
-def _warm_up(oil, drift_per_k, wear=1.0, seed=7, windows=2400):
+def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_from_s=math.inf,
+         pressure=False):
     """
     Commission at 20 degC, then warm the oil to 55 degC (from 500 s, tau 300 s of wall time).
 
-    The measured torque's gain drifts by drift_per_k per K from commissioning's temperature
-    (a drive's k_t); from 700 s of wall time the valve plate is ``wear`` times healthy.
-    Returns the monitor and the first alarm's verdict ('' if none).
+    The measured torque reads drift_per_k (T - 20 degC) high: the drive's k_t. From 1500 s of
+    wall time (the oil at 53 degC) the gain is ``gain_step`` off besides, and from 700 s the
+    valve plate is ``wear`` times healthy. From ``cool_from_s`` the oil cools back to 20 degC
+    (tau 300 s). ``pressure``: the drift is the pressure sensor's, reading low as it warms
+    (the theoretical torque's part only). Returns the first alarm's verdict ('' if none).
     """
     rng = np.random.default_rng(seed)
-    mon = _monitor(oil)
     t, verdict, n = 0.0, '', WINDOW_SAMPLES
     for _ in range(windows):
-        wall = 10.0 * t
+        wall = 10.0 * t  # monitored running is a tenth of the time
         temperature = 20.0 if wall < 500.0 else 55.0 - 35.0 * math.exp(-(wall - 500.0) / 300.0)
+        if wall > cool_from_s:
+            temperature = 20.0 + (temperature - 20.0) * math.exp(-(wall - cool_from_s) / 300.0)
         speed = rng.uniform(50.0, 900.0)
         vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
         sign = 1.0 if rng.random() < 0.5 else -1.0
         th = rng.uniform(-8.0, 8.0)  # 60-120 bar: a 3 % gain error is 0.2-0.45 N m
         h = baseline_regressors(vp, other, th * sign, sign, 0.0)
-        gain = drift_per_k * (temperature - 20.0)
-        e = float(h @ TRUTH) + gain * (th * sign + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other)
+        delivered = th * sign + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other
+        gain = drift_per_k * (temperature - 20.0) + (gain_step if wall > 1500.0 else 0.0)
+        e = float(h @ TRUTH) + gain * (th * sign if pressure else delivered)
         if wall > 700.0:
             e += (wear - 1.0) * (1 + TRUTH[0]) * vp
         e += rng.normal(0.0, 0.01)
@@ -199,7 +204,13 @@ def _warm_up(oil, drift_per_k, wear=1.0, seed=7, windows=2400):
         if not verdict and max(trace.level) > OK:
             verdict = mon.verdict(1.0)[0]
         t += n * DT
-    return mon, verdict
+    return verdict
+
+
+def _warm_up(oil, drift_per_k, wear=1.0, seed=7, windows=2400):
+    """`warm` a monitor with ``oil``'s allowances; return it and its first alarm's verdict."""
+    mon = _monitor(oil)
+    return mon, warm(mon, drift_per_k, seed, windows, wear=wear)
 
 
 def test_a_torque_constant_drifting_as_the_oil_warms_is_no_alarm_and_wear_is_still_named():
