@@ -130,9 +130,9 @@ class MonitorPersistence:
 
         The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
         the isolation's sums, and how far the friction baseline followed the oil
-        (``oil_follow``, where the viscosity is assumed) or the gain the drive's drift
-        (``gain_follow``, where it is measured); not the open window (a fraction of a
-        second).
+        (``oil_follow``, where the viscosity is assumed) or the torque measurement's drift
+        learnt with the oil temperature (``gain_follow``, where it is measured); not the
+        open window (a fraction of a second).
 
         Returns
         -------
