@@ -32,7 +32,7 @@ So it is learnt where it shows: when the detection would alarm and the isolation
 the torque gain or the pressure gain (a cause merely close behind the one named is not
 enough: on the bank's warm-up family, seed 0, a torque offset of +0.2 N m, the pressure
 gain within the lead, was taken as 0.52-0.59e-3 / K of drift and its detection delayed
-from 3.8 to 9.3 and 13.7 s of monitored running), the change has the drift's sign
+from 2.5 and 3.4 to 9.3 and 13.7 s of monitored running), the change has the drift's sign
 (the torque reads high against the pressure when warmer than commissioning, low when
 cooler), and the coefficients stay within ``torque_constant_drift_max_per_k`` together, the
 gain's coefficient takes the change over T - T_0 (``follow``), the baseline follows
