@@ -146,13 +146,11 @@ class GainFollow:
         if named not in _GAINS:  # an offset or a drive loss is no drift, however close
             return False
         i = _GAINS.index(named)
-        j = named
-        change = isolation.evidence()[1]
-        line = isolation.moving(j)
+        line = isolation.moving(named)
+        step = (line[0] if line is not None else float(isolation.evidence()[1][named])) / delta_c
         per_k = self.per_k.copy()
-        per_k[i] += (line[0] if line is not None else float(change[j])) / delta_c
-        if not (_READS_HIGH[i] * (per_k[i] - self.per_k[i]) > 0.0
-                and float(per_k @ _READS_HIGH) <= self.max_per_k):
+        per_k[i] += step
+        if not (_READS_HIGH[i] * step > 0.0 and float(per_k @ _READS_HIGH) <= self.max_per_k):
             return False
         self.per_k = per_k
         self.times += 1
