@@ -170,7 +170,7 @@ def test_gain_allowance_is_one_sided_the_drift_times_the_temperature_change_time
 
 
 def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_from_s=math.inf,
-         pressure=False):
+         pressure=False, loads=(-8.0, 8.0), offset_nm=0.0):
     """
     Commission at 20 degC, then warm the oil to 55 degC (from 500 s, tau 300 s of wall time).
 
@@ -178,7 +178,9 @@ def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_fro
     wall time (the oil at 53 degC) the gain is ``gain_step`` off besides, and from 700 s the
     valve plate is ``wear`` times healthy. From ``cool_from_s`` the oil cools back to 20 degC
     (tau 300 s). ``pressure``: the drift is the pressure sensor's, reading low as it warms
-    (the theoretical torque's part only). Returns the first alarm's verdict ('' if none).
+    (the theoretical torque's part only). ``loads``: the range of the theoretical torque
+    [N m] (always pumping where it is one-sided), ``offset_nm``: a torque offset from 1500 s
+    of wall time. Returns the first alarm's verdict ('' if none).
     """
     rng = np.random.default_rng(seed)
     t, verdict, n = 0.0, '', WINDOW_SAMPLES
@@ -189,12 +191,13 @@ def warm(mon, drift_per_k, seed, windows=2400, gain_step=0.0, wear=1.0, cool_fro
             temperature = 20.0 + (temperature - 20.0) * math.exp(-(wall - cool_from_s) / 300.0)
         speed = rng.uniform(50.0, 900.0)
         vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
-        sign = 1.0 if rng.random() < 0.5 else -1.0
-        th = rng.uniform(-8.0, 8.0)  # 60-120 bar: a 3 % gain error is 0.2-0.45 N m
+        sign = 1.0 if rng.random() < 0.5 or loads[0] >= 0.0 else -1.0
+        th = rng.uniform(*loads)  # 60-120 bar: a 3 % gain error is 0.2-0.45 N m
         h = baseline_regressors(vp, other, th * sign, sign, 0.0)
         delivered = th * sign + (1 + TRUTH[0]) * vp + (1 + TRUTH[1]) * other
         gain = drift_per_k * (temperature - 20.0) + (gain_step if wall > 1500.0 else 0.0)
         e = float(h @ TRUTH) + gain * (th * sign if pressure else delivered)
+        e += offset_nm if wall > 1500.0 else 0.0
         if wall > 700.0:
             e += (wear - 1.0) * (1 + TRUTH[0]) * vp
         e += rng.normal(0.0, 0.01)

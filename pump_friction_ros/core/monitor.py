@@ -44,9 +44,9 @@ is dropped), and each window mean is one measurement:
    threshold (hysteresis). The sums are capped at `CUSUM_CAP_RATIO` times the ERROR
    threshold. An EWMA of d gives the diagnostics a smoothed view. Without the temperature
    topic a fall of a friction, as the isolation names it, is the oil thinning: the baseline
-   follows it down instead of alarming (``oil_follow``); with it, a gain change of the
-   torque measurement reading high as the oil warms is its drift, learnt instead
-   (``gain_follow``).
+   follows it down instead of alarming (``oil_follow``); with it, a change that a drift of
+   the torque measurement with T - T_0, reading high as the oil warms, explains clearly
+   better than any step is that drift, learnt instead (``gain_follow``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
    zero, and the valve-plate and other friction scales relative to the healthy pump.
 
@@ -131,7 +131,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self._follow = OilFollow() if viscosity_assumed else None  # the oil thinning
         self._gain_follow = None if viscosity_assumed else GainFollow(  # the drive's k_t
-            config.torque_constant_drift_max_per_k)
+            config.torque_constant_drift_max_per_k, attribution.isolation_memory_s)
         self.reset()
 
     # -- state ----------------------------------------------------------------------------
@@ -369,6 +369,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self.cusum_neg_nm_s = float(self._neg.max())
         self.isolation.add(sig, d, 1.0 / var, duration,
                            self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0)
+        if self._gain_follow is not None:  # every window: a drift shows before the change
+            self._gain_follow.add(sig, d, 1.0 / var, duration,
+                                  temperature - baseline.temperature_c)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         if level > OK and self._followed(temperature, baseline.temperature_c):
             self.isolation.reset()

@@ -216,8 +216,9 @@ class EstimatorConfig:
         'as large (docs/monitor.md); 0: none, the drive compensates.', 0.0, 0.1)
     torque_constant_drift_max_per_k: float = _param(
         1.5e-3, "Temperature topic: the largest drift of the drive's torque constant the "
-        'monitor learns (a gain change reading high as the oil warms is followed, not '
-        'alarmed) [1/K] (NdFeB 0.8-1.3e-3; ferrite 2e-3); 0: never.', 0.0, 0.1)
+        'monitor learns (a change that the torque reading high as the oil warms explains '
+        'better than any step is followed, not alarmed) [1/K] (NdFeB 0.8-1.3e-3; ferrite '
+        '2e-3); 0: never.', 0.0, 0.1)
     attribution_window_s: float = _param(
         0.25, 'Monitored running averaged into one measurement of the baseline and the '
         'isolation [s].', 0.01, 60.0)
