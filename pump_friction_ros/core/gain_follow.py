@@ -87,8 +87,8 @@ class GainFollow:
         ``torque_constant_drift_max_per_k``: the largest drift learnt, both gains together
         [1/K].
     memory_s : float
-        ``isolation_memory_s``: the windows of a change are forgotten as the isolation's
-        are [s].
+        ``isolation_memory_s``: the windows the drift is fitted on are forgotten as the
+        isolation's are [s].
 
     """
 
@@ -136,8 +136,8 @@ class GainFollow:
 
         """
         u = np.array([float(signatures[j]) for j in _GAINS]) * delta_c
-        if not np.all(np.isfinite(u)):
-            u = np.zeros(len(_GAINS))
+        if not (np.all(np.isfinite(u)) and math.isfinite(d_nm * weight)):
+            u = np.zeros(len(_GAINS))  # the window tells the drift nothing, it only ages
         keep = math.exp(-duration_s / self._memory_s)
         self._g = keep * self._g + weight * u * u
         self._b = keep * self._b + weight * d_nm * u
@@ -177,22 +177,23 @@ class GainFollow:
     def follow(self, isolation: FaultIsolation, temperature_c: float,
                reference_c: float) -> bool:
         """
-        Learn the change the isolation finds if it is the measurement's drift; return whether.
+        Learn the measurement's drift where it explains the change; return whether.
 
         Parameters
         ----------
         isolation : FaultIsolation
             The isolation of the change the detection alarms on.
         temperature_c : float
-            The oil temperature now [degC].
+            The oil temperature now [degC] (NaN, or T_0 itself: nothing is learnt; the fit
+            uses each window's own temperature).
         reference_c : float
             Commissioning's mean oil temperature T_0 [degC].
 
         Returns
         -------
         bool
-            True where the change was learnt as drift (`per_k` updated); False where the
-            alarm stands.
+            True where the drift was learnt (`per_k` takes the c fitted over the windows in
+            memory); False where the alarm stands.
 
         """
         delta_c = temperature_c - reference_c
@@ -250,7 +251,7 @@ class GainFollow:
                 'torque constant (or the pressure sensor) drifting, not a fault')
 
     def state(self) -> dict[str, object]:
-        """Return the learnt drift as plain values."""
+        """Return the learnt drift, and the sums of its fit over the windows, as plain values."""
         return {'torque_gain_per_k': float(self.per_k[0]),
                 'pressure_gain_per_k': float(self.per_k[1]), 'times': self.times,
                 'g': self._g.tolist(), 'b': self._b.tolist()}
@@ -268,7 +269,7 @@ class GainFollow:
         ------
         ValueError
             A coefficient of the wrong sign or not finite, a negative count, or malformed
-            sums of the change's windows.
+            sums of the fit.
 
         """
         per_k = np.array([float(state[key]) for key in (  # type: ignore[arg-type]
@@ -281,11 +282,13 @@ class GainFollow:
         drift = float(per_k @ _READS_HIGH)
         if drift > self.max_per_k:
             per_k *= max(self.max_per_k, 0.0) / drift
-        # the change's windows came later (a file without them: from the next window on)
+        # the fit's sums came later (a file without them: fitted from the next window on)
         n = len(_GAINS)
         (g, b), _ = read_sums(state, {'g': (n,), 'b': (n,)}, (), 'gain follow') \
-            if 'g' in state else ([np.zeros(n)] * 2, [])
+            if 'g' in state or 'b' in state else ([np.zeros(n), np.zeros(n)], [])
         if np.any(g < 0.0):
             raise ValueError(f'gain follow square sums {g.tolist()!r}')
+        if drift > self.max_per_k:  # the sums were of the change less the drift before
+            g, b = np.zeros(n), np.zeros(n)
         self.per_k, self.times = per_k, times
         self._g, self._b = g, b
