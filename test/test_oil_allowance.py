@@ -122,9 +122,11 @@ def test_the_undetectable_change_grows_by_the_allowance():
     unseen = without.undetectable_change['valve_plate']
     grown = with_band.undetectable_change['valve_plate'] - unseen
     # the mean allowance over the windows (speed uniform on 50-900 rad/s: 475 x SLOPE) over
-    # the RMS of the valve-plate signature, which the same windows give both monitors
-    norm = EstimatorConfig().cusum_drift_nm / unseen  # the baseline's std is tiny here
-    assert grown == pytest.approx(475.0 * SLOPE / norm, rel=0.15)
+    # the RMS of the valve-plate signature over the recent windows, which the same windows
+    # give both monitors
+    rms = math.sqrt(with_band._recent_s2[0, 0] / with_band._recent_s)
+    assert rms == pytest.approx(math.sqrt(without._recent_s2[0, 0] / without._recent_s))
+    assert grown == pytest.approx(475.0 * SLOPE / rms, rel=0.15)
     # and a healthy reading's interval spans it
     assert 1.96 * with_band.valve_plate_scale_std >= with_band.undetectable_change[
         'valve_plate'] * 0.99
@@ -249,12 +251,18 @@ def test_the_undetectable_change_grows_by_half_the_drift_interval():
     without, _ = _warm_up(OilAllowance([0.0], [0.0], VG68, 0.0), 1.0e-3)
     mean = with_drift._gain_allowance_nm_s / with_drift._allowance_s  # half the width
     assert mean > 0.05  # 1.2e-3 x ~30 K x ~4 N m, halved
-    # (k + 2 sigma + mean) / rms(s_j) against (k + 2 sigma) / rms(s_j): the same baseline
-    margin = without._unseen_nm
-    assert with_drift._unseen_nm == margin
-    for cause, grown in with_drift.undetectable_change.items():
+    # each sum i sees a change of cause j from (k n_i + (2 sigma + mean) r_i) / |C_ij| on,
+    # against (k n_i + 2 sigma r_i) / |C_ij|: the same baseline (n_i, sigma) and the same
+    # recent points (C, the mean of s s^T over them; r_i = sqrt(C_ii)): the least sum
+    # grows by one of mean r_i / |C_ij|, each at least mean / r_j (Cauchy-Schwarz: the own)
+    assert with_drift._unseen_nm == without._unseen_nm
+    second = with_drift._recent_s2 / with_drift._recent_s
+    assert second == pytest.approx(without._recent_s2 / without._recent_s, rel=1e-12)
+    rms = np.sqrt(np.diag(second))
+    for j, (cause, grown) in enumerate(with_drift.undetectable_change.items()):
         unseen = without.undetectable_change[cause]
-        assert grown / unseen == pytest.approx(1.0 + mean / margin, rel=1e-9), cause
+        growth = mean * rms / np.abs(second[:, j])
+        assert mean / rms[j] * (1.0 - 1e-9) <= grown - unseen <= growth.max() * (1.0 + 1e-9)
 
 
 def test_the_estimator_wires_the_oil_law_the_drift_and_the_band(table):

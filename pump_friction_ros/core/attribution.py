@@ -49,7 +49,9 @@ follows the viscosity and they do not.
 The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standard
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 ``scale_systematic_std``: systematic model error does not average away with more windows.
-The reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
+A friction cause's change is fitted together with a torque-constant drift too small to have
+been learnt (``drift_nuisance``), where the temperature topic makes one possible. The
+reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
 still moving (a line through it over the memory, `FaultIsolation.moving`) up to its present
 value, and, until one cause is confirmed, no change as well as the change that the
 detection does not see.
@@ -63,6 +65,7 @@ import math
 import numpy as np
 
 from .baseline import Baseline, read_sums
+from .drift_nuisance import DriftNuisance
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -229,13 +232,17 @@ class FaultIsolation:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
         self.stats = _ChangeStats()
+        self.drift = DriftNuisance(_N)
+        """A torque-constant drift too small to be learnt, fitted with the friction's change
+        (``drift_nuisance``)."""
 
     def reset(self) -> None:
         """Forget every window."""
         self.stats.clear()
+        self.drift.reset()
 
     def add(self, s: np.ndarray, d_nm: float, weight: float, duration_s: float,
-            changing: bool) -> None:
+            changing: bool, drift_nm: float = 0.0) -> None:
         """
         Add one window, or forget the windows when no change is under way.
 
@@ -252,13 +259,18 @@ class FaultIsolation:
         changing : bool
             A CUSUM of the monitor is above zero after this window: the window belongs to
             the change; otherwise the sums start afresh.
+        drift_nm : float
+            The signature of a torque-constant drift not learnt: (T - T_0) times the
+            torque gain's [N m / (1/K)] (0 or NaN: none possible, or the temperature not
+            known).
 
         """
+        keep = math.exp(-duration_s / self.settings.isolation_memory_s)
+        self.drift.add(s, drift_nm, d_nm, weight, keep, changing)
         if not changing:
             self.stats.clear()
             return
-        self.stats.add(s, d_nm, weight, math.exp(-duration_s / self.settings.isolation_memory_s),
-                       duration_s)
+        self.stats.add(s, d_nm, weight, keep, duration_s)
 
     def evidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -283,6 +295,27 @@ class FaultIsolation:
         delta = np.where(ok, stats.b / safe, math.nan)
         std = np.where(ok, np.sqrt(inflation / safe), math.nan)
         return t / inflation, delta, std
+
+    def friction_change(self, j: int) -> tuple[float, float]:
+        """
+        Return a friction cause's change and its std, a drift too small to be learnt fitted too.
+
+        Returns
+        -------
+        tuple of float
+            delta_j and its std (noise and the best single cause's lack of fit, as
+            `evidence`) [-]; (NaN, NaN) where the windows carry no signature of j.
+
+        """
+        stats = self.stats
+        g_jj = float(stats.g[j, j])
+        if not g_jj > 0.0:
+            return math.nan, math.nan
+        gjj = np.diag(stats.g)
+        t_best = float(np.max(np.where(gjj > 0.0, stats.b ** 2 / np.where(gjj > 0.0, gjj, 1.0),
+                                       0.0)))
+        delta, var = self.drift.change(j, g_jj, float(stats.b[j]))
+        return delta, math.sqrt(stats.lack_of_fit(t_best) * var)
 
     def moving(self, j: int) -> tuple[float, float, float] | None:
         """
@@ -335,8 +368,10 @@ class FaultIsolation:
         if close:
             return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[j]]} or {_WORDS[CAUSES[k]]}: not '
                     f'yet told apart (evidence {t[j]:.0f} against {t[k]:.0f})', -1)
-        name = _WORDS[CAUSES[j]]
-        scale = f'scale {1.0 + delta[j]:.2f} of healthy'
+        if j not in (_VP, _OTHER):
+            return _CLASS[j], f'not friction: {_WORDS[CAUSES[j]]} {delta[j]:+.3g}' + (
+                ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else ''), j
+        scale = f'scale {1.0 + self.friction_change(j)[0]:.2f} of healthy'
         line = self.moving(j)
         if line is not None:
             scale += f', {1.0 + line[0]:.2f} now and {"rising" if line[2] < 0.0 else "falling"}'
@@ -345,14 +380,11 @@ class FaultIsolation:
             if self.viscosity_assumed:
                 name = ('valve plate or oil viscosity (the viscosity is a parameter: no '
                         f'temperature topic) ({scale})')
-        elif j == _OTHER:
+        else:
             name = f'not the valve plate: other friction ({scale})'
             if self.viscosity_assumed:  # the bearing's drag follows the oil too
                 name = ('not the valve plate: other friction or oil viscosity (the viscosity '
                         f'is a parameter: no temperature topic) ({scale})')
-        else:
-            name = f'not friction: {name} {delta[j]:+.3g}' + (
-                ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else '')
         return _CLASS[j], name, j
 
     def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool
@@ -363,7 +395,8 @@ class FaultIsolation:
         Each interval (scale +- 1.96 std, 95 %) spans the changes the data do not rule out:
 
         * the cause the verdict names, once the change is confirmed (WARN or ERROR): its
-          change +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
+          change (`friction_change`: a torque-constant drift too small to be learnt fitted
+          with it) +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
           level, the floor ``scale_systematic_std``); where the change still moves (the
           slope of a line through it over the memory is significant at ``attribution_z``)
           the span reaches the line's present value too: a wear still growing is larger
@@ -401,17 +434,17 @@ class FaultIsolation:
                 out += [1.0, max(floor, float(undetectable[i]) / Z95)]
             return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
-        _, delta, std = self.evidence()
         level_std = baseline.std()
         coef = baseline.coefficients
         for i in (_VP, _OTHER):
-            noise = float(std[i]) if std[i] == std[i] else 1.0
+            delta, std = self.friction_change(i)
+            noise = std if std == std else 1.0
             if confirmed and named >= 0 and named != i:  # another cause explains it
                 out += [1.0, math.hypot(noise, floor)]
                 continue
             # the baseline's uncertainty of the friction level, relative to it
             level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
-            change = float(delta[i]) if delta[i] == delta[i] else 0.0
+            change = delta if delta == delta else 0.0
             low, high = _interval(change, noise * noise + floor * floor, level_rel_std)
             if confirmed and named == i:
                 line = self.moving(i)
@@ -431,7 +464,7 @@ class FaultIsolation:
         st = self.stats
         return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
                 'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
-                'b1': st.b1.tolist()}
+                'b1': st.b1.tolist(), 'drift': self.drift.state()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -457,3 +490,6 @@ class FaultIsolation:
         st.g, st.b, st.c, st.count = g, b, c, count
         st.g1, st.g2, st.b1 = g1, g2, b1
         st.windows = int(state['windows'])  # type: ignore[call-overload]
+        self.drift.reset()  # the drift's sums came later still (without: from the next window)
+        if 'drift' in state:
+            self.drift.load(state['drift'])  # type: ignore[arg-type]

@@ -72,6 +72,8 @@ from .oil_follow import OilFollow
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
 
+_TORQUE_GAIN = CAUSES.index('torque_gain')
+
 STALE = 3
 CUSUM_CAP_RATIO = 1.2
 """The sums are capped at this times the ERROR threshold, so that after a repair the level
@@ -159,6 +161,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._allowance_nm_s = 0.0  # the oil allowances taken off, summed over running
         self._gain_allowance_nm_s = 0.0
         self._allowance_s = 0.0
+        n = len(CAUSES)  # the signatures' products over running, and that running, both
+        self._recent_s2 = np.zeros((n, n))  # forgotten as the isolation's windows are
+        self._recent_s = 0.0
         self._set_signatures()
         self.level = OK
         self.alarm_onset_s = math.nan
@@ -357,6 +362,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._allowance_nm_s += viscous * duration
         self._gain_allowance_nm_s += 0.5 * (high - low) * duration
         self._allowance_s += duration
+        keep = math.exp(-duration / self.isolation.settings.isolation_memory_s)
+        self._recent_s2 = keep * self._recent_s2 + duration * np.outer(sig, sig)
+        self._recent_s = keep * self._recent_s + duration
         margin = self._sigmas * math.sqrt(prediction_var) + viscous
         high += margin
         low -= margin
@@ -367,8 +375,11 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._neg = np.clip(self._neg + (-z - k) * duration, 0.0, cap)
         self.cusum_pos_nm_s = float(self._pos.max())
         self.cusum_neg_nm_s = float(self._neg.max())
+        drift = math.nan  # a k_t drift too small to be learnt, fitted with the change's size
+        if self._gain_follow is not None:
+            drift = float(sig[_TORQUE_GAIN]) * (temperature - baseline.temperature_c)
         self.isolation.add(sig, d, 1.0 / var, duration,
-                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0)
+                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0, drift)
         if self._gain_follow is not None:  # every window: a drift shows before the change
             self._gain_follow.add(sig, d, 1.0 / var, duration,
                                   temperature - baseline.temperature_c)
@@ -425,11 +436,33 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._undetectable = self._unseen(self._allowance_s)
 
     def _unseen(self, running_s: float) -> np.ndarray:
-        """Return the undetectable change per cause, with the allowances' means so far."""
-        if not running_s > 0.0:
-            return self._unseen_nm / self._norm
-        allowance = (self._allowance_nm_s + self._gain_allowance_nm_s) / running_s
-        return (self._unseen_nm + allowance) / self._norm
+        """
+        Return the undetectable change per cause, on the recent points, with the allowances.
+
+        A change delta of cause j moves d by delta s_j, and the CUSUM of every cause i by
+        z_i = s_i (delta s_j - m) / n_i: n_i the RMS of s_i over commissioning, m the margin
+        and allowances taken off d. On average over the recent points (the isolation's
+        memory: C the mean of s s^T over them, r_i = sqrt(C_ii) >= |mean s_i sign(s_j)|)
+        sum i stays at zero while delta < (k n_i + m r_i) / |C_ij|; the change goes unseen
+        while no sum moves: below the least of these. On commissioning's points the own
+        sum is the least (Cauchy-Schwarz); on a pump commissioned cold and now warm the
+        valve plate's film shear is a quarter of what it was, its own sum sees a sixteenth,
+        and the sums whose signatures did not shrink (drive loss, offset) see more.
+        """
+        margin = self._unseen_nm - self._k
+        if running_s > 0.0:
+            margin += (self._allowance_nm_s + self._gain_allowance_nm_s) / running_s
+        if not self._recent_s > 0.0:  # commissioning's points: C = diag(n^2), the own sum
+            return (self._k + margin) / self._norm
+        second = self._recent_s2 / self._recent_s
+        rms = np.sqrt(np.maximum(np.diag(second), 0.0))
+        sums = (self._k * self._norm + margin * rms)[:, None]  # (cause i's sum, change j)
+        seen = np.abs(second)
+        unseen = np.where(seen > 1e-12 * sums, sums / np.where(seen > 0.0, seen, 1.0), np.inf)
+        # (a change that moves no sum at all goes unseen whatever its size: published large,
+        # not infinite)
+        least: np.ndarray = np.minimum(unseen.min(axis=0), 1e6 * (self._k + margin) / self._norm)
+        return least
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, then the change."""

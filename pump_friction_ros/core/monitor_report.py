@@ -62,11 +62,13 @@ class MonitorReport:
         """
         Return, per cause, the largest relative change the detection does not see.
 
-        A change delta of cause j moves its CUSUM's input by about delta times the RMS of
-        its signature over commissioning's points, less the margin taken off the change
-        there (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std, and
-        the oil allowance's mean over the windows since): below the allowance k it never
-        sums. A reported scale holds it in its interval
+        A change delta of cause j feeds its CUSUM delta r_j^2 / n_j less the margin taken off
+        the change (``cusum_baseline_sigmas`` times the RMS of the baseline's prediction std,
+        and the oil allowance's mean over the windows since) times r_j / n_j, where n_j is
+        the RMS of its signature over commissioning's points and r_j over the recent ones
+        (the isolation's memory): below the allowance k it never sums. On a pump
+        commissioned cold and running warm the valve plate's r_j is a quarter of n_j, and
+        what goes unseen grows up to sixteenfold. A reported scale holds it in its interval
         while no change is under way. Zero before the baseline is learnt.
 
         Returns

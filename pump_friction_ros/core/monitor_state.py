@@ -33,6 +33,7 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 
 from .attribution import CAUSES
+from .baseline import read_sums
 from .oil_follow import followed
 
 if TYPE_CHECKING:
@@ -101,6 +102,8 @@ class MonitorPersistence:
     _allowance_nm_s: float
     _gain_allowance_nm_s: float
     _allowance_s: float
+    _recent_s2: np.ndarray
+    _recent_s: float
 
     _follow: OilFollow | None
     _gain_follow: GainFollow | None
@@ -150,6 +153,8 @@ class MonitorPersistence:
                 'allowance_nm_s': self._allowance_nm_s,
                 'gain_allowance_nm_s': self._gain_allowance_nm_s,
                 'allowance_s': self._allowance_s,
+                'recent_signature_s2': self._recent_s2.tolist(),
+                'recent_running_s': self._recent_s,
                 **({'oil_follow': self._follow.state()} if self._follow is not None else {}),
                 **({'gain_follow': self._gain_follow.state()}
                    if self._gain_follow is not None else {})}
@@ -210,6 +215,14 @@ class MonitorPersistence:
         if not all(math.isfinite(x) and x >= 0.0 for x in allowance):
             raise ValueError('monitor allowance sums negative or not finite')
         self._allowance_nm_s, self._gain_allowance_nm_s, self._allowance_s = allowance
+        # so did the recent points' signature sums: without them, commissioning's points
+        n = len(CAUSES)
+        (s2,), (running,) = read_sums(state, {'recent_signature_s2': (n, n)},
+                                      ('recent_running_s',), 'recent signature') \
+            if 'recent_running_s' in state else ([np.zeros((n, n))], [0.0])
+        if np.any(np.diag(s2) < 0.0):
+            raise ValueError('recent signature sums negative')
+        self._recent_s2, self._recent_s = s2, running
         self._set_signatures()
         self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
         self._pos, self._neg = pos, neg
