@@ -247,11 +247,19 @@ def test_the_recent_points_survive_a_restart_and_an_older_file_falls_back_to_com
     # commissioning's points: the film shear 1 / 0.3 of the recent ones'
     assert again.undetectable_change['valve_plate'] < 0.5 * mon.undetectable_change[
         'valve_plate']
+    before = dict(again.undetectable_change)
+    asymmetric = np.array(state['recent_signature_s2'])
+    asymmetric[0, 1] *= 1.5
     for bad in ({'recent_running_s': -1.0}, {'recent_signature_s2': [[1.0] * 6] * 5},
                 {'recent_signature_s2': (-np.eye(6)).tolist()},
+                {'recent_signature_s2': asymmetric.tolist()},
+                {'recent_signature_s2': (2.0 * np.ones((6, 6)) - np.eye(6)).tolist()},
                 {'recent_running_s': math.nan}):
         with pytest.raises(ValueError, match='malformed monitor state'):
             again.load_state_dict({**state, **bad})
+        assert again.undetectable_change == before  # left as it was
+    with pytest.raises(ValueError, match='malformed monitor state'):  # half of the pair
+        again.load_state_dict({**older, 'recent_running_s': 10.0})
 
 
 def test_a_baseline_file_from_before_the_line_fit_loads_and_goes_on():

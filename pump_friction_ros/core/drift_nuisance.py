@@ -27,18 +27,24 @@ viscosity as the oil warms, so on the warm pump a small gain error is a large pa
 So a friction cause's change is fitted jointly with that drift (a nuisance parameter):
 d = delta_j s_j + c u, u = (T - T_0) times the torque gain's signature. The step s_j is
 nothing before the change began, the drift is there throughout: the windows before the
-change (in the isolation's memory) fix c, those of the change delta_j. The normal equations
-need the sums of u over every window (g_u = sum w u^2, b_u = sum w d u) and its cross sum
-with each cause over the change's windows (x_j = sum w s_j u):
+change fix c, those of the change delta_j. The normal equations need the sums of u over
+every window (g_u = sum w u^2, b_u = sum w d u) and its cross sum with each cause over the
+change's windows (x_j = sum w s_j u):
 
     delta_j = (b_j g_u - x_j b_u) / (g_jj g_u - x_j^2),
     var(delta_j) = g_u / (g_jj g_u - x_j^2)  (noise units),
 
 the single-cause estimate b_j / g_jj with its variance 1 / g_jj where u carries nothing
-(no topic, no drift possible, the oil at T_0). No drift there: the estimate is unbiased
-either way, and the interval widens by 1 / (1 - rho^2), rho the correlation of s_j and u
-over the windows. The drift's sign and size are left free: a bound would pull the change
-back towards the single-cause estimate that the drift biases.
+(no topic, no drift allowed, the oil at T_0). No drift there: the estimate is unbiased
+either way, and its std widens by 1 / sqrt(1 - rho^2), rho the cosine of s_j (nothing before
+the change) and u over the windows. The drift's sign and size are left free: a bound would
+pull the change back towards the single-cause estimate that the drift biases.
+
+The windows of the change are forgotten as the isolation's are (``isolation_memory_s``);
+those before it stop ageing while it lasts. A change held for many memories would otherwise
+leave only its own windows, where a step and a drift differ by the points' spread alone (on
+a steady point, not at all); the drift before the change is what it was. Where the two
+cannot be told apart the change is the single cause's, with a variance that says so.
 """
 
 from __future__ import annotations
@@ -69,14 +75,16 @@ class DriftNuisance:
 
     def reset(self) -> None:
         """Forget every window."""
-        self.g = 0.0  # sum w u^2 over every window in memory
-        self.b = 0.0  # sum w d u over every window in memory
+        self.g_before = 0.0  # sum w u^2 over the windows before the change
+        self.b_before = 0.0  # sum w d u over them
+        self.g_change = 0.0  # the same over the change's windows
+        self.b_change = 0.0
         self.x = np.zeros(self._n)  # sum w u s_j over the change's windows
 
     def add(self, s: np.ndarray, u_nm: float, d_nm: float, weight: float, keep: float,
             changing: bool) -> None:
         """
-        Add one window (every window; the cross sums only those of the change).
+        Add one window: to the change's sums, or to those before it.
 
         Parameters
         ----------
@@ -93,15 +101,22 @@ class DriftNuisance:
         keep : float
             exp(-duration / isolation_memory_s): how much the older windows keep [-].
         changing : bool
-            The window belongs to the change (the isolation keeps it); otherwise the cross
-            sums start afresh, as the isolation's do.
+            The window belongs to the change (the isolation keeps it). Otherwise no change
+            is under way, or it ended: its windows join those before the next one, and the
+            cross sums start afresh, as the isolation's do.
 
         """
         if not (math.isfinite(u_nm) and math.isfinite(d_nm * weight)):
             u_nm = 0.0
-        self.g = keep * self.g + weight * u_nm * u_nm
-        self.b = keep * self.b + weight * d_nm * u_nm
-        self.x = keep * self.x + weight * u_nm * s if changing else np.zeros(self._n)
+        if changing:  # the windows before it do not age while it lasts
+            self.g_change = keep * self.g_change + weight * u_nm * u_nm
+            self.b_change = keep * self.b_change + weight * d_nm * u_nm
+            self.x = keep * self.x + weight * u_nm * s
+            return
+        self.g_before = keep * (self.g_before + self.g_change) + weight * u_nm * u_nm
+        self.b_before = keep * (self.b_before + self.b_change) + weight * d_nm * u_nm
+        self.g_change = self.b_change = 0.0
+        self.x = np.zeros(self._n)
 
     def change(self, j: int, g_jj: float, b_j: float) -> tuple[float, float]:
         """
@@ -121,18 +136,23 @@ class DriftNuisance:
         tuple of float
             delta_j [-] and its variance in noise units (times the lack of fit, as the
             single-cause one); the single-cause b_j / g_jj and 1 / g_jj where the drift's
-            signature carries nothing or cannot be told from s_j.
+            signature carries nothing; b_j / g_jj and a variance of 1e9 / g_jj where the
+            drift and the step cannot be told apart.
 
         """
-        x = float(self.x[j])
-        det = g_jj * self.g - x * x
-        if not (self.g > 0.0 and det > 1e-9 * g_jj * self.g):
+        g_u = self.g_before + self.g_change
+        if not g_u > 0.0:
             return b_j / g_jj, 1.0 / g_jj
-        return (b_j * self.g - x * self.b) / det, self.g / det
+        x = float(self.x[j])
+        det = g_jj * g_u - x * x
+        if not det > 1e-9 * g_jj * g_u:
+            return b_j / g_jj, 1e9 / g_jj
+        return (b_j * g_u - x * (self.b_before + self.b_change)) / det, g_u / det
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values."""
-        return {'g': self.g, 'b': self.b, 'x': self.x.tolist()}
+        return {'g_before': self.g_before, 'b_before': self.b_before,
+                'g_change': self.g_change, 'b_change': self.b_change, 'x': self.x.tolist()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -149,8 +169,14 @@ class DriftNuisance:
             Missing or malformed sums.
 
         """
-        (x,), (g,) = read_sums(state, {'x': (self._n,)}, ('g',), 'drift nuisance')
-        b = float(state['b'])  # type: ignore[arg-type]
-        if not math.isfinite(b):
-            raise ValueError('drift nuisance sums negative or not finite')
-        self.g, self.b, self.x = g, b, x
+        try:
+            (x,), (g_before, g_change) = read_sums(state, {'x': (self._n,)},
+                                                   ('g_before', 'g_change'), 'drift nuisance')
+            b_before, b_change = (float(state[key])  # type: ignore[arg-type]
+                                  for key in ('b_before', 'b_change'))
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f'drift nuisance sums: {exc!r}') from None
+        if not (math.isfinite(b_before) and math.isfinite(b_change)):
+            raise ValueError('drift nuisance sums not finite')
+        self.g_before, self.b_before, self.g_change, self.b_change, self.x = \
+            g_before, b_before, g_change, b_change, x

@@ -73,6 +73,8 @@ __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
 
 _TORQUE_GAIN = CAUSES.index('torque_gain')
+_UNSEEN_CAP = 1e6
+"""The undetectable change published where no CUSUM moves with a cause [-]: any size."""
 
 STALE = 3
 CUSUM_CAP_RATIO = 1.2
@@ -151,7 +153,12 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._reset_detection()
         self._open(0.0)
 
-    def _reset_detection(self) -> None:
+    def _reset_detection(self, points: bool = True) -> None:
+        """Restart the detection; ``points``: forget the recent points too (new signatures)."""
+        if points:
+            n = len(CAUSES)  # the signatures' products over running, and that running, both
+            self._recent_s2 = np.zeros((n, n))  # forgotten as the isolation's windows are
+            self._recent_s = 0.0
         self.ewma_nm = 0.0
         self._var = 0.0
         self._pos = np.zeros(len(CAUSES))  # a CUSUM per cause, each side
@@ -161,9 +168,6 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._allowance_nm_s = 0.0  # the oil allowances taken off, summed over running
         self._gain_allowance_nm_s = 0.0
         self._allowance_s = 0.0
-        n = len(CAUSES)  # the signatures' products over running, and that running, both
-        self._recent_s2 = np.zeros((n, n))  # forgotten as the isolation's windows are
-        self._recent_s = 0.0
         self._set_signatures()
         self.level = OK
         self.alarm_onset_s = math.nan
@@ -376,7 +380,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self.cusum_pos_nm_s = float(self._pos.max())
         self.cusum_neg_nm_s = float(self._neg.max())
         drift = math.nan  # a k_t drift too small to be learnt, fitted with the change's size
-        if self._gain_follow is not None:
+        if self._gain_follow is not None and self._gain_follow.max_per_k > 0.0:
             drift = float(sig[_TORQUE_GAIN]) * (temperature - baseline.temperature_c)
         self.isolation.add(sig, d, 1.0 / var, duration,
                            self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0, drift)
@@ -385,8 +389,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                                   temperature - baseline.temperature_c)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         if level > OK and self._followed(temperature, baseline.temperature_c):
-            self.isolation.reset()
-            self._reset_detection()
+            self.isolation.reset()  # (a drift learnt keeps the signatures, the oil's not)
+            self._reset_detection(points=self.baseline is not baseline)
             return
         if level != self.level:
             if self.level == OK:
@@ -458,10 +462,11 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         rms = np.sqrt(np.maximum(np.diag(second), 0.0))
         sums = (self._k * self._norm + margin * rms)[:, None]  # (cause i's sum, change j)
         seen = np.abs(second)
-        unseen = np.where(seen > 1e-12 * sums, sums / np.where(seen > 0.0, seen, 1.0), np.inf)
-        # (a change that moves no sum at all goes unseen whatever its size: published large,
-        # not infinite)
-        least: np.ndarray = np.minimum(unseen.min(axis=0), 1e6 * (self._k + margin) / self._norm)
+        unseen = np.where(seen > 1e-12 * np.outer(rms, rms), sums / np.where(
+            seen > 0.0, seen, 1.0), np.inf)
+        # (a change that moves no sum at all goes unseen whatever its size: published as a
+        # million, not infinite)
+        least: np.ndarray = np.minimum(unseen.min(axis=0), _UNSEEN_CAP)
         return least
 
     def _publish_fit(self) -> None:
