@@ -85,6 +85,28 @@ def test_the_joint_fit_is_the_weighted_least_squares_of_the_step_and_the_drift()
     assert var == pytest.approx(covariance[0, 0], rel=1e-9)
 
 
+def test_the_glr_and_the_lack_of_fit_are_each_single_causes_weighted_least_squares():
+    # a drift no single step fits: the best cause's residual variance is above the noise
+    keep = math.exp(-DURATION_S / EstimatorConfig().isolation_memory_s)
+    isolation = _isolation(6, 0.8, 0.6e-3)
+    windows = [w for w in _windows(6, 0.8, 0.6e-3) if w[3]]
+    ages = np.arange(len(windows))[::-1]
+    x = np.array([s for s, *_ in windows])
+    d = np.array([d for _, _, d, _ in windows])
+    w = np.sqrt(NOISE_NM ** -2 * keep ** ages)
+    rss = [np.sum((d * w - (x[:, [j]] * w[:, None]) @ np.linalg.lstsq(
+        x[:, [j]] * w[:, None], d * w, rcond=None)[0]) ** 2) for j in range(x.shape[1])]
+    t = np.sum(np.square(d * w)) - np.array(rss)
+    np.testing.assert_allclose(isolation.stats.glr(), t, rtol=1e-7)
+    assert isolation.stats.best_glr() == pytest.approx(t.max(), rel=1e-9)
+    dof = np.sum(keep ** ages) - 1.0
+    assert isolation.stats.lack_of_fit() == pytest.approx(min(rss) / dof, rel=1e-6)
+    assert min(rss) / dof > 2.0
+    empty = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    assert np.isnan(empty.stats.glr()).all() and empty.stats.best_glr() == 0.0
+    assert empty.stats.lack_of_fit() == 1.0
+
+
 @pytest.mark.parametrize('seed', [11, 12, 13])
 @pytest.mark.parametrize('drift_per_k', [0.3e-3, 0.6e-3])
 def test_a_drift_too_small_to_learn_does_not_bias_the_valve_plates_change(seed, drift_per_k):

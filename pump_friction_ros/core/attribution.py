@@ -201,10 +201,20 @@ class _ChangeStats:
         inflation = max(1.0, (self.c - now * b0 - slope * b1) / dof)
         return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
 
-    def lack_of_fit(self, t_best: float) -> float:
+    def glr(self) -> np.ndarray:
+        """Return each cause's GLR statistic b_j^2 / g_jj [-] (NaN: no signature of it)."""
+        gjj = np.diag(self.g)
+        return np.where(gjj > 0.0, self.b ** 2 / np.where(gjj > 0.0, gjj, 1.0), math.nan)
+
+    def best_glr(self) -> float:
+        """Return the best single cause's GLR statistic [-] (0: no cause has a signature)."""
+        t = self.glr()
+        return 0.0 if np.isnan(t).all() else float(np.nanmax(t))
+
+    def lack_of_fit(self) -> float:
         """Return the residual variance about the best single cause, in noise units (>= 1)."""
         dof = self.count - 1.0
-        return max(1.0, (self.c - t_best) / dof) if dof >= 1.0 else 1.0
+        return max(1.0, (self.c - self.best_glr()) / dof) if dof >= 1.0 else 1.0
 
 
 def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
@@ -232,9 +242,7 @@ class FaultIsolation:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
         self.stats = _ChangeStats()
-        self.drift = DriftNuisance(_N)
-        """A torque-constant drift too small to be learnt, fitted with the friction's change
-        (``drift_nuisance``)."""
+        self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
 
     def reset(self) -> None:
         """Forget every window."""
@@ -288,10 +296,10 @@ class FaultIsolation:
         gjj = np.diag(stats.g)
         ok = gjj > 0.0
         safe = np.where(ok, gjj, 1.0)
-        t = np.where(ok, stats.b ** 2 / safe, math.nan)
+        t = stats.glr()
         # an F-test rather than a chi-square: the noise scaled by how badly even the best
         # single cause fits (systematic model error is not white noise)
-        inflation = stats.lack_of_fit(float(np.nanmax(t)) if ok.any() else 0.0)
+        inflation = stats.lack_of_fit()
         delta = np.where(ok, stats.b / safe, math.nan)
         std = np.where(ok, np.sqrt(inflation / safe), math.nan)
         return t / inflation, delta, std
@@ -311,11 +319,8 @@ class FaultIsolation:
         g_jj = float(stats.g[j, j])
         if not g_jj > 0.0:
             return math.nan, math.nan
-        gjj = np.diag(stats.g)
-        t_best = float(np.max(np.where(gjj > 0.0, stats.b ** 2 / np.where(gjj > 0.0, gjj, 1.0),
-                                       0.0)))
         delta, var = self.drift.change(j, g_jj, float(stats.b[j]))
-        return delta, math.sqrt(stats.lack_of_fit(t_best) * var)
+        return delta, math.sqrt(stats.lack_of_fit() * var)
 
     def moving(self, j: int) -> tuple[float, float, float] | None:
         """

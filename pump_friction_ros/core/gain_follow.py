@@ -230,13 +230,10 @@ class GainFollow:
 
         """
         stats = isolation.stats
-        gjj = np.diag(stats.g)
-        steps = np.where(gjj > 0.0, stats.b ** 2 / np.where(gjj > 0.0, gjj, 1.0), 0.0)
         ok = self._g > 0.0
         drifts = np.where(ok, self._b ** 2 / np.where(ok, self._g, 1.0), 0.0)
         i = int(np.argmax(drifts))
-        best = float(steps.max())
-        lead = (float(drifts[i]) - best) / stats.lack_of_fit(best)
+        lead = (float(drifts[i]) - stats.best_glr()) / stats.lack_of_fit()
         if not lead >= isolation.settings.attribution_z ** 2:
             return -1, 0.0
         return i, float(self._b[i] / self._g[i])

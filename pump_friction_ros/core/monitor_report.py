@@ -70,7 +70,7 @@ class MonitorReport:
         allowance k no sum moves: the least of (k n_i + m r_i) / |C_ij|. On commissioning's
         points that is the own sum's (k + m) / n_j; on a pump commissioned cold and running
         warm the valve plate's film shear is a quarter of what it was and the figure grows
-        (x1.08 to x1.38-1.40 on the bank's seed-2 cold start). A reported scale holds it in
+        (x1.08 to x1.35-1.40 on the bank's seed-2 cold start). A reported scale holds it in
         its interval while no change is under way. Zero before the baseline is learnt; 1e6
         for a change that moves no sum.
 
