@@ -217,13 +217,14 @@ class MonitorPersistence:
         self._allowance_nm_s, self._gain_allowance_nm_s, self._allowance_s = allowance
         # so did the recent points' signature sums: without them, commissioning's points
         n = len(CAUSES)
-        (s2,), (running,) = read_sums(state, {'recent_signature_s2': (n, n)},
-                                      ('recent_running_s',), 'recent signature') \
-            if 'recent_running_s' in state or 'recent_signature_s2' in state \
-            else ([np.zeros((n, n))], [0.0])
-        diag = np.sqrt(np.maximum(np.diag(s2), 0.0))  # a sum of outer products: symmetric,
-        if np.any(np.diag(s2) < 0.0) or np.any(s2 != s2.T) or np.any(  # Cauchy-Schwarz
-                np.abs(s2) > (1.0 + 1e-9) * np.outer(diag, diag)):
+        s2, running = np.zeros((n, n)), 0.0
+        if 'recent_running_s' in state or 'recent_signature_s2' in state:  # both, or refused
+            (s2,), (running,) = read_sums(state, {'recent_signature_s2': (n, n)},
+                                          ('recent_running_s',), 'recent signature')
+        # a forgotten sum of outer products: symmetric, its diagonal >= 0, Cauchy-Schwarz
+        rms = np.sqrt(np.maximum(np.diag(s2), 0.0))
+        if np.any(np.diag(s2) < 0.0) or np.any(s2 != s2.T) or np.any(
+                np.abs(s2) > (1.0 + 1e-9) * np.outer(rms, rms)):
             raise ValueError('recent signature sums not a sum of products')
         self._recent_s2, self._recent_s = s2, running
         self._set_signatures()
