@@ -58,6 +58,11 @@ def _isolation(seed, wear, drift_per_k, **kwargs):
     return isolation
 
 
+def _sums(g_jj, b_j):
+    """Return the change's sums g and b of cause VP alone (the others play no part)."""
+    return np.diag([g_jj] * 6), np.full(6, b_j)
+
+
 def test_the_joint_fit_is_the_weighted_least_squares_of_the_step_and_the_drift():
     memory_s = EstimatorConfig().isolation_memory_s
     keep = math.exp(-DURATION_S / memory_s)
@@ -80,7 +85,7 @@ def test_the_joint_fit_is_the_weighted_least_squares_of_the_step_and_the_drift()
     x, d, w = np.array(rows), np.array(ds), np.sqrt(ws)
     fit = np.linalg.lstsq(x * w[:, None], d * w, rcond=None)[0]
     covariance = np.linalg.inv(x.T @ (x * np.square(w)[:, None]))
-    delta, var = nuisance.change(VP, g_jj, b_j)
+    delta, var = nuisance.change(VP, *_sums(g_jj, b_j))
     assert delta == pytest.approx(fit[0], rel=1e-9)
     assert var == pytest.approx(covariance[0, 0], rel=1e-9)
 
@@ -105,6 +110,73 @@ def test_the_glr_and_the_lack_of_fit_are_each_single_causes_weighted_least_squar
     empty = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
     assert np.isnan(empty.stats.glr()).all() and empty.stats.best_glr() == 0.0
     assert empty.stats.lack_of_fit() == 1.0
+
+
+def test_the_profiled_glr_is_each_causes_likelihood_ratio_against_the_drift_alone():
+    # over every window, the change's and those before it: T_j = RSS(drift alone) -
+    # RSS(step of j and drift), and the cosine of two causes that of their parts the drift
+    # does not explain (the partial correlation)
+    keep = math.exp(-DURATION_S / EstimatorConfig().isolation_memory_s)
+    isolation = _isolation(7, 0.8, 0.5e-3)
+    windows = list(_windows(7, 0.8, 0.5e-3))
+    onset = sum(not changing for *_, changing in windows)
+    ages = [len(windows) - 1 - k if changing else onset - 1 - k
+            for k, (*_, changing) in enumerate(windows)]
+    w = np.sqrt(NOISE_NM ** -2 * keep ** np.array(ages, dtype=float))
+    x = np.array([s if changing else np.zeros(6) for s, *_, changing in windows]) * w[:, None]
+    u = np.array([u for _, u, _, _ in windows]) * w
+    d = np.array([d for _, _, d, _ in windows]) * w
+
+    def rss(columns):
+        a = np.column_stack(columns)
+        return float(np.sum((d - a @ np.linalg.lstsq(a, d, rcond=None)[0]) ** 2))
+
+    g, b, told = isolation.drift.profile(isolation.stats.g, isolation.stats.b)
+    assert told.all()
+    t = np.array([rss([u]) - rss([x[:, j], u]) for j in range(6)])
+    np.testing.assert_allclose(b * b / np.diag(g), t, rtol=1e-6)
+    rest = x - np.outer(u, u @ x) / (u @ u)
+    np.testing.assert_allclose(g, rest.T @ rest, rtol=1e-7, atol=1e-9 * np.abs(g).max())
+
+
+def _named(seed, truth, drift_per_k, known=True):
+    """
+    Name a friction change on near-collinear frictions as a torque constant drifts.
+
+    A load-driven cycle: the pressure's torque grows with the speed, the valve plate's and
+    the other friction's signatures are correlated 0.999 or more, and the oil warms 10 to 45
+    K above commissioning. From window 400 of 800, the friction ``truth`` (0: valve plate,
+    1: other) is x1.4; the torque reads ``drift_per_k`` (T - T_0) of itself off throughout.
+    """
+    rng = np.random.default_rng(seed)
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    base = 0.02 + 0.03 * (seed % 2)
+    for k in range(800):
+        speed = rng.uniform(100.0, 900.0)
+        load = 8e-3 * speed + rng.uniform(0.0, 0.5)
+        s = np.array([0.05 + 4e-4 * speed, base + 3e-4 * speed, 0.0, -load, 1.0, 1.0])
+        s[2] = load + s[0] + s[1]
+        u = (10.0 + 35.0 * k / 800) * s[2]
+        d = (0.4 * s[truth] if k >= 400 else 0.0) + drift_per_k * u + rng.normal(0.0, NOISE_NM)
+        isolation.add(s, d, NOISE_NM ** -2, DURATION_S, k >= 400, u if known else math.nan)
+    return isolation.verdict()[0]
+
+
+def test_a_drift_too_small_to_learn_profiled_out_names_no_friction_for_the_other():
+    # each friction's step alone takes a part of the drift: between signatures this close a
+    # part enough to name the wrong one. Fitted with the drift, neither is named for the other
+    cases = [(seed, truth, c) for seed in range(6) for truth in (0, 1) for c in (3e-4, -3e-4)]
+    frictions = ('valve_plate', 'other_friction')
+    profiled = [_named(*case) for case in cases]
+    single = [_named(*case, known=False) for case in cases]  # the temperature not known
+    wrong, single_wrong = ([name == frictions[1 - truth] for name, (_, truth, _) in
+                            zip(names, cases)] for names in (profiled, single))
+    right, single_right = ([name == frictions[truth] for name, (_, truth, _) in
+                            zip(names, cases)] for names in (profiled, single))
+    # here 6 of 24 named wrong by the steps alone (7 right); none with the drift (10 right,
+    # 10 that cannot tell, 4 gains as the single causes)
+    assert sum(single_wrong) >= 3 and not any(wrong)
+    assert sum(right) >= sum(single_right)
 
 
 @pytest.mark.parametrize('seed', [11, 12, 13])
@@ -171,7 +243,7 @@ def test_a_change_held_for_many_memories_keeps_the_drift_it_began_with():
         if changing:
             g_jj = keep * g_jj + NOISE_NM ** -2 * s[VP] ** 2
             b_j = keep * b_j + NOISE_NM ** -2 * s[VP] * d
-    delta, var = nuisance.change(VP, g_jj, b_j)
+    delta, var = nuisance.change(VP, *_sums(g_jj, b_j))
     assert abs(delta - 0.8) < 3.0 * math.sqrt(var) < 0.05
     assert abs(b_j / g_jj - 0.8) > 0.25  # the step alone: the drift's 0.9 % of the load
 
@@ -182,7 +254,7 @@ def test_a_step_and_a_drift_that_cannot_be_told_apart_get_a_variance_that_says_s
     for _ in range(100):  # only the change's windows, at one point: u and s_j collinear
         nuisance.add(s, 30.0 * s[2], 0.2, 1e4, 1.0, True)
     g_jj, b_j = 100 * 1e4 * s[VP] ** 2, 100 * 1e4 * s[VP] * 0.2
-    delta, var = nuisance.change(VP, g_jj, b_j)
+    delta, var = nuisance.change(VP, *_sums(g_jj, b_j))
     assert delta == pytest.approx(b_j / g_jj) and math.sqrt(var * g_jj) > 1e4
 
 

@@ -50,7 +50,9 @@ The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standar
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 ``scale_systematic_std``: systematic model error does not average away with more windows.
 A friction cause's change is fitted together with a torque-constant drift too small to have
-been learnt (``drift_nuisance``), where the temperature topic makes one possible. The
+been learnt (``drift_nuisance``), where the temperature topic makes one possible; so is the
+choice between the two frictions once the change is friction (their signatures correlate
+0.97-0.99 on a load-driven cycle, where the part of the drift each takes decides). The
 reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
 still moving (a line through it over the memory, `FaultIsolation.moving`) up to its present
 value, and, until one cause is confirmed, no change as well as the change that the
@@ -65,6 +67,7 @@ import math
 import numpy as np
 
 from .baseline import Baseline, read_sums
+from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
@@ -148,75 +151,6 @@ def signature_matrix(baseline: Baseline, drive_loss_nm: float,
                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])  # drive loss
 
 
-class _ChangeStats:
-    """Weighted sums over the windows since the monitor's CUSUMs left zero."""
-
-    def __init__(self) -> None:
-        self.clear()
-
-    def clear(self) -> None:
-        self.g = np.zeros((_N, _N))
-        self.b = np.zeros(_N)
-        self.c = 0.0
-        self.count = 0.0  # windows, forgotten as the sums are
-        self.windows = 0
-        # per cause, the same sums weighted by each window's age (monitored running since
-        # it) and its square: a change that moves along a line (`trend`)
-        self.g1 = np.zeros(_N)
-        self.g2 = np.zeros(_N)
-        self.b1 = np.zeros(_N)
-
-    def add(self, s: np.ndarray, d: float, w: float, keep: float, age_s: float) -> None:
-        # the older windows age by the new one's running: tau -> tau + age_s
-        g0 = np.diag(self.g)
-        self.g2 = keep * (self.g2 + 2.0 * age_s * self.g1 + age_s * age_s * g0)
-        self.g1 = keep * (self.g1 + age_s * g0)
-        self.b1 = keep * (self.b1 + age_s * self.b)
-        self.g = keep * self.g + w * np.outer(s, s)
-        self.b = keep * self.b + w * d * s
-        self.c = keep * self.c + w * d * d
-        self.count = keep * self.count + 1.0
-        self.windows += 1
-
-    def trend(self, j: int) -> tuple[float, float, float] | None:
-        """
-        Fit cause j's change as a line in time, delta(tau) = now + slope tau.
-
-        Returns
-        -------
-        tuple of float or None
-            The change now, its variance and the slope's z score (noise units, scaled
-            by the line's own lack of fit; the slope is against the age tau, so negative:
-            rising); None where the windows cannot fit a line.
-
-        """
-        g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
-        det = g0 * g2 - g1 * g1
-        dof = self.count - 2.0
-        if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
-            return None
-        b0, b1 = float(self.b[j]), float(self.b1[j])
-        now = (g2 * b0 - g1 * b1) / det
-        slope = (g0 * b1 - g1 * b0) / det
-        inflation = max(1.0, (self.c - now * b0 - slope * b1) / dof)
-        return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
-
-    def glr(self) -> np.ndarray:
-        """Return each cause's GLR statistic b_j^2 / g_jj [-] (NaN: no signature of it)."""
-        gjj = np.diag(self.g)
-        return np.where(gjj > 0.0, self.b ** 2 / np.where(gjj > 0.0, gjj, 1.0), math.nan)
-
-    def best_glr(self) -> float:
-        """Return the best single cause's GLR statistic [-] (0: no cause has a signature)."""
-        t = self.glr()
-        return 0.0 if np.isnan(t).all() else float(np.nanmax(t))
-
-    def lack_of_fit(self) -> float:
-        """Return the residual variance about the best single cause, in noise units (>= 1)."""
-        dof = self.count - 1.0
-        return max(1.0, (self.c - self.best_glr()) / dof) if dof >= 1.0 else 1.0
-
-
 def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
     """Return the 95 % interval of a relative change, the level's uncertainty added."""
     half = Z95 * math.sqrt(var + (change * level_rel_std) ** 2)
@@ -241,7 +175,7 @@ class FaultIsolation:
     def __init__(self, settings: AttributionSettings, viscosity_assumed: bool) -> None:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
-        self.stats = _ChangeStats()
+        self.stats = ChangeStats(_N)
         self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
 
     def reset(self) -> None:
@@ -316,18 +250,29 @@ class FaultIsolation:
 
         """
         stats = self.stats
-        g_jj = float(stats.g[j, j])
-        if not g_jj > 0.0:
+        if not stats.g[j, j] > 0.0:
             return math.nan, math.nan
-        delta, var = self.drift.change(j, g_jj, float(stats.b[j]))
+        delta, var = self.drift.change(j, stats.g, stats.b)
         return delta, math.sqrt(stats.lack_of_fit() * var)
+
+    def _friction_pair(self, t: np.ndarray) -> tuple[int, int, np.ndarray, float]:
+        # which friction: `evidence`'s T (t) of valve plate and other friction with the drift
+        # profiled out, the better first, and their cosine so
+        stats = self.stats
+        g, b, told = self.drift.profile(stats.g, stats.b)
+        t = t.copy()
+        for i in (_VP, _OTHER):
+            t[i] = b[i] ** 2 / g[i, i] / stats.lack_of_fit() if told[i] else 0.0
+        cos = float(g[_VP, _OTHER] / math.sqrt(g[_VP, _VP] * g[_OTHER, _OTHER])) \
+            if told[_VP] and told[_OTHER] else 0.0
+        return (_VP, _OTHER, t, cos) if t[_VP] >= t[_OTHER] else (_OTHER, _VP, t, cos)
 
     def moving(self, j: int) -> tuple[float, float, float] | None:
         """
         Return cause j's change as it is now where it still moves, else None.
 
         Moving: the slope of a line through the change over the memory
-        (`_ChangeStats.trend`) is significant at ``attribution_z``.
+        (`ChangeStats.trend`) is significant at ``attribution_z``.
 
         Returns
         -------
@@ -366,6 +311,12 @@ class FaultIsolation:
         if close and _CLASS[j] == _CLASS[k] == Verdict.NOT_FRICTION:
             return (Verdict.NOT_FRICTION, f'not friction: {_WORDS[CAUSES[j]]} or '
                     f'{_WORDS[CAUSES[k]]}', j)
+        if j in (_VP, _OTHER) and (not close or k in (_VP, _OTHER)):
+            # friction: which one is told with a k_t drift too small to be learnt profiled
+            # out, as its size is (the same as above where the drift carries nothing)
+            j, k, t, cos = self._friction_pair(t)
+            close = not t[j] - t[k] >= z2
+            tied = close and abs(cos) >= self.settings.identifiability_correlation
         if tied:
             return (Verdict.CANNOT_TELL, f'cannot tell {_WORDS[CAUSES[j]]} from '
                     f'{_WORDS[CAUSES[k]]} on this duty cycle (signatures correlated '

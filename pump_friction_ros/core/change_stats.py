@@ -1,0 +1,129 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The sums over the windows of a change that the isolation's GLR per cause reads.
+
+Over the windows since the monitor's CUSUMs left zero, each weighted by its inverse noise
+variance w and forgotten with the isolation's memory: g = sum w s s^T, b = sum w s d,
+c = sum w d^2 and their count. Cause j alone (d = delta_j s_j) fits with delta_j = b_j /
+g_jj and explains T_j = b_j^2 / g_jj of c (`glr`, Basseville & Nikiforov 1993, ch. 7); what
+the best single cause leaves, per degree of freedom, is the lack of fit (`lack_of_fit`,
+at least the noise). Each cause's sums weighted by the windows' age too fit a change
+moving along a line in time (`trend`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ['ChangeStats']
+
+
+class ChangeStats:
+    """
+    Weighted sums of the causes' signatures and the change over the change's windows.
+
+    Parameters
+    ----------
+    causes : int
+        Number of causes (signature entries).
+
+    """
+
+    def __init__(self, causes: int) -> None:
+        self._n = causes
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget every window."""
+        self.g = np.zeros((self._n, self._n))
+        self.b = np.zeros(self._n)
+        self.c = 0.0
+        self.count = 0.0  # windows, forgotten as the sums are
+        self.windows = 0
+        # per cause, the same sums weighted by each window's age (monitored running since
+        # it) and its square: a change that moves along a line (`trend`)
+        self.g1 = np.zeros(self._n)
+        self.g2 = np.zeros(self._n)
+        self.b1 = np.zeros(self._n)
+
+    def add(self, s: np.ndarray, d: float, w: float, keep: float, age_s: float) -> None:
+        """
+        Add one window: the older ones kept by ``keep``, aged by its running.
+
+        Parameters
+        ----------
+        s : ndarray
+            Its signatures of the causes [N m].
+        d : float
+            Its change from the baseline [N m].
+        w : float
+            Its inverse noise variance [1/N m^2].
+        keep : float
+            exp(-duration / isolation_memory_s) [-].
+        age_s : float
+            Its monitored running [s].
+
+        """
+        # the older windows age by the new one's running: tau -> tau + age_s
+        g0 = np.diag(self.g)
+        self.g2 = keep * (self.g2 + 2.0 * age_s * self.g1 + age_s * age_s * g0)
+        self.g1 = keep * (self.g1 + age_s * g0)
+        self.b1 = keep * (self.b1 + age_s * self.b)
+        self.g = keep * self.g + w * np.outer(s, s)
+        self.b = keep * self.b + w * d * s
+        self.c = keep * self.c + w * d * d
+        self.count = keep * self.count + 1.0
+        self.windows += 1
+
+    def trend(self, j: int) -> tuple[float, float, float] | None:
+        """
+        Fit cause j's change as a line in time, delta(tau) = now + slope tau.
+
+        Returns
+        -------
+        tuple of float or None
+            The change now, its variance and the slope's z score (noise units, scaled
+            by the line's own lack of fit; the slope is against the age tau, so negative:
+            rising); None where the windows cannot fit a line.
+
+        """
+        g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+        det = g0 * g2 - g1 * g1
+        dof = self.count - 2.0
+        if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
+            return None
+        b0, b1 = float(self.b[j]), float(self.b1[j])
+        now = (g2 * b0 - g1 * b1) / det
+        slope = (g0 * b1 - g1 * b0) / det
+        inflation = max(1.0, (self.c - now * b0 - slope * b1) / dof)
+        return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
+
+    def glr(self) -> np.ndarray:
+        """Return each cause's GLR statistic b_j^2 / g_jj [-] (NaN: no signature of it)."""
+        gjj = np.diag(self.g)
+        return np.where(gjj > 0.0, self.b ** 2 / np.where(gjj > 0.0, gjj, 1.0), math.nan)
+
+    def best_glr(self) -> float:
+        """Return the best single cause's GLR statistic [-] (0: no cause has a signature)."""
+        t = self.glr()
+        return 0.0 if np.isnan(t).all() else float(np.nanmax(t))
+
+    def lack_of_fit(self) -> float:
+        """Return the residual variance about the best single cause, in noise units (>= 1)."""
+        dof = self.count - 1.0
+        return max(1.0, (self.c - self.best_glr()) / dof) if dof >= 1.0 else 1.0
