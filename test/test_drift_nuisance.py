@@ -72,7 +72,7 @@ def test_the_joint_fit_is_the_weighted_least_squares_of_the_step_and_the_drift()
     windows = list(_windows(5, 0.8, 0.4e-3))
     onset = sum(not changing for *_, changing in windows)
     for k, (s, u, d, changing) in enumerate(windows):
-        nuisance.add(s, u, d, NOISE_NM ** -2, keep, changing)
+        nuisance.add(s, u, d, NOISE_NM ** -2, keep, changing, DURATION_S)
         # the memory weighs each window keep^age; the windows before the change stop
         # ageing while it lasts
         age = len(windows) - 1 - k if changing else onset - 1 - k
@@ -137,6 +137,51 @@ def test_the_profiled_glr_is_each_causes_likelihood_ratio_against_the_drift_alon
     np.testing.assert_allclose(b * b / np.diag(g), t, rtol=1e-6)
     rest = x - np.outer(u, u @ x) / (u @ u)
     np.testing.assert_allclose(g, rest.T @ rest, rtol=1e-7, atol=1e-9 * np.abs(g).max())
+
+
+def test_the_line_through_the_change_is_fitted_with_the_drift_by_least_squares():
+    # the change now + slope tau over its windows (tau: a window's age), the drift c u over
+    # every window; the variance of now scaled by what the three leave of the change's windows
+    keep = math.exp(-DURATION_S / EstimatorConfig().isolation_memory_s)
+    windows = list(_windows(8, 0.8, 0.5e-3))
+    isolation = _isolation(8, 0.8, 0.5e-3)
+    onset = sum(not changing for *_, changing in windows)
+    rows, ds, ws, change = [], [], [], []
+    for k, (s, u, d, changing) in enumerate(windows):
+        age = len(windows) - 1 - k if changing else onset - 1 - k
+        tau = age * DURATION_S
+        rows.append([s[VP], tau * s[VP], u] if changing else [0.0, 0.0, u])
+        ds.append(d)
+        ws.append(NOISE_NM ** -2 * keep ** age)
+        change.append(changing)
+    w = np.sqrt(ws)
+    x, d = np.array(rows) * w[:, None], np.array(ds) * w
+    fit = np.linalg.lstsq(x, d, rcond=None)[0]
+    rest = (d - x @ fit)[np.array(change)]
+    dof = float(np.sum(keep ** np.arange(len(rest)))) - 2.0
+    var = max(1.0, float(rest @ rest) / dof) * np.linalg.inv(x.T @ x)[0, 0]
+    now, now_var, _ = isolation.stats.trend(VP, isolation.drift.line_sums(VP))
+    assert now == pytest.approx(fit[0], rel=1e-7)
+    assert now_var == pytest.approx(var, rel=1e-6)
+
+
+def _ramp(seed, drift_per_k, ramp):
+    """Return the isolation of 600 windows as the oil warms, the valve plate x1.8 from 300."""
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    for k, (s, u, d, changing) in enumerate(_windows(seed, 0.0, drift_per_k)):
+        wear = 0.8 * ((k - 299) / 300 if ramp else 1.0) if changing else 0.0
+        isolation.add(s, d + wear * s[VP], NOISE_NM ** -2, DURATION_S, changing, u)
+    return isolation
+
+
+@pytest.mark.parametrize('seed', [21, 22, 23])
+@pytest.mark.parametrize('drift_per_k', [0.3e-3, -0.3e-3])
+def test_a_step_on_a_drifting_drive_is_not_moving_and_a_ramp_is(seed, drift_per_k):
+    # the drift grows with the warming as a wear growing would: a line through the step
+    # alone reads it as one (here 1.8 as 2.3 "now and rising")
+    assert _ramp(seed, drift_per_k, False).moving(VP) is None
+    now, var, z = _ramp(seed, drift_per_k, True).moving(VP)
+    assert z < 0.0 and abs(now - 0.8) < 3.0 * math.sqrt(var)
 
 
 def _named(seed, truth, drift_per_k, known=True):
@@ -213,13 +258,13 @@ def test_where_the_temperature_is_not_known_the_change_is_the_single_causes():
 def test_the_windows_before_the_change_keep_while_it_lasts_and_its_own_join_them_after():
     nuisance = DriftNuisance(6)
     s = np.array([0.2, 0.3, 7.0, -6.5, 1.0, 1.0])
-    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, False)  # before the change
-    nuisance.add(s, 20.0, 0.05, 4.0, 0.5, True)  # the change: the one before does not age
-    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, True)
+    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, False, 1.0)  # before the change
+    nuisance.add(s, 20.0, 0.05, 4.0, 0.5, True, 1.0)  # the change: the one before does not age
+    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, True, 1.0)
     assert nuisance.g_before == pytest.approx(400.0) and nuisance.b_before == pytest.approx(2.0)
     assert nuisance.g_change == pytest.approx(0.5 * 1600.0 + 400.0)
     assert nuisance.x == pytest.approx((0.5 * 80.0 + 40.0) * s)
-    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, False)  # the CUSUMs back at zero: all before now
+    nuisance.add(s, 10.0, 0.05, 4.0, 0.5, False, 1.0)  # the CUSUMs back at zero: all before now
     assert np.all(nuisance.x == 0.0) and nuisance.g_change == nuisance.b_change == 0.0
     assert nuisance.g_before == pytest.approx(0.5 * (400.0 + 1200.0) + 400.0)
     assert nuisance.b_before == pytest.approx(0.5 * (2.0 + 0.5 * 4.0 + 2.0) + 2.0)
@@ -239,7 +284,7 @@ def test_a_change_held_for_many_memories_keeps_the_drift_it_began_with():
         changing = k >= 400
         u = 30.0 * s[2] * (k / 400.0 if not changing else 1.0)  # warmed up by the onset
         d = (0.8 * s[VP] if changing else 0.0) + 0.3e-3 * u + rng.normal(0.0, NOISE_NM)
-        nuisance.add(s, u, d, NOISE_NM ** -2, keep, changing)
+        nuisance.add(s, u, d, NOISE_NM ** -2, keep, changing, DURATION_S)
         if changing:
             g_jj = keep * g_jj + NOISE_NM ** -2 * s[VP] ** 2
             b_j = keep * b_j + NOISE_NM ** -2 * s[VP] * d
@@ -252,7 +297,7 @@ def test_a_step_and_a_drift_that_cannot_be_told_apart_get_a_variance_that_says_s
     nuisance = DriftNuisance(6)
     s = np.array([0.2, 0.3, 7.0, -6.5, 1.0, 1.0])
     for _ in range(100):  # only the change's windows, at one point: u and s_j collinear
-        nuisance.add(s, 30.0 * s[2], 0.2, 1e4, 1.0, True)
+        nuisance.add(s, 30.0 * s[2], 0.2, 1e4, 1.0, True, DURATION_S)
     g_jj, b_j = 100 * 1e4 * s[VP] ** 2, 100 * 1e4 * s[VP] * 0.2
     delta, var = nuisance.change(VP, *_sums(g_jj, b_j))
     assert delta == pytest.approx(b_j / g_jj) and math.sqrt(var * g_jj) > 1e4

@@ -208,7 +208,7 @@ class FaultIsolation:
 
         """
         keep = math.exp(-duration_s / self.settings.isolation_memory_s)
-        self.drift.add(s, drift_nm, d_nm, weight, keep, changing)
+        self.drift.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
         if not changing:
             self.stats.clear()
             return
@@ -272,7 +272,8 @@ class FaultIsolation:
         Return cause j's change as it is now where it still moves, else None.
 
         Moving: the slope of a line through the change over the memory
-        (`ChangeStats.trend`) is significant at ``attribution_z``.
+        (`ChangeStats.trend`, with a drift too small to be learnt where one is possible) is
+        significant at ``attribution_z``.
 
         Returns
         -------
@@ -280,7 +281,7 @@ class FaultIsolation:
             The change now, its variance, the slope's z score (negative: rising) [-].
 
         """
-        line = self.stats.trend(j)
+        line = self.stats.trend(j, self.drift.line_sums(j))
         z = self.settings.attribution_z
         return line if line is not None and line[2] * line[2] >= z * z else None
 

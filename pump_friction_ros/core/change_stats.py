@@ -90,27 +90,47 @@ class ChangeStats:
         self.count = keep * self.count + 1.0
         self.windows += 1
 
-    def trend(self, j: int) -> tuple[float, float, float] | None:
+    def trend(self, j: int, drift: tuple[float, ...] = ()) -> tuple[float, float, float] | None:
         """
         Fit cause j's change as a line in time, delta(tau) = now + slope tau.
+
+        Parameters
+        ----------
+        j : int
+            The cause.
+        drift : tuple of float
+            A drift c u fitted with the line (`DriftNuisance.line_sums`: sum w s_j u and
+            sum w tau s_j u over the change's windows, sum w u^2 and sum w d u over them and
+            over every window); empty: none.
 
         Returns
         -------
         tuple of float or None
             The change now, its variance and the slope's z score (noise units, scaled
-            by the line's own lack of fit; the slope is against the age tau, so negative:
-            rising); None where the windows cannot fit a line.
+            by the line's own lack of fit over the change's windows; the slope is against
+            the age tau, so negative: rising); None where the windows cannot fit a line.
 
         """
         g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+        b0, b1 = float(self.b[j]), float(self.b1[j])
+        x0, x1, g_ch, b_ch, g_u, b_u = drift or (0.0,) * 6
+        if g_u > 0.0:  # the drift's c profiled out (as `DriftNuisance.profile`)
+            g0, g1, g2 = g0 - x0 * x0 / g_u, g1 - x0 * x1 / g_u, g2 - x1 * x1 / g_u
+            b0, b1 = b0 - x0 * b_u / g_u, b1 - x1 * b_u / g_u
         det = g0 * g2 - g1 * g1
         dof = self.count - 2.0
         if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
             return None
-        b0, b1 = float(self.b[j]), float(self.b1[j])
         now = (g2 * b0 - g1 * b1) / det
         slope = (g0 * b1 - g1 * b0) / det
-        inflation = max(1.0, (self.c - now * b0 - slope * b1) / dof)
+        rss = self.c - now * b0 - slope * b1
+        if g_u > 0.0:  # what the line and the drift leave of the change's windows
+            c = (b_u - x0 * now - x1 * slope) / g_u
+            a0, a1, a2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+            rss = (self.c - 2.0 * (now * float(self.b[j]) + slope * float(self.b1[j]) + c * b_ch)
+                   + now * now * a0 + 2.0 * now * slope * a1 + slope * slope * a2
+                   + 2.0 * c * (x0 * now + x1 * slope) + c * c * g_ch)
+        inflation = max(1.0, rss / dof)
         return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
 
     def glr(self) -> np.ndarray:

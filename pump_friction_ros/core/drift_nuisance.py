@@ -88,9 +88,10 @@ class DriftNuisance:
         self.g_change = 0.0  # the same over the change's windows
         self.b_change = 0.0
         self.x = np.zeros(self._n)  # sum w u s_j over the change's windows
+        self.x1 = np.zeros(self._n)  # sum w tau u s_j over them, tau a window's age [s]
 
     def add(self, s: np.ndarray, u_nm: float, d_nm: float, weight: float, keep: float,
-            changing: bool) -> None:
+            changing: bool, duration_s: float) -> None:
         """
         Add one window: to the change's sums, or to those before it.
 
@@ -112,11 +113,15 @@ class DriftNuisance:
             The window belongs to the change (the isolation keeps it). Otherwise no change
             is under way, or it ended: its windows join those before the next one, and the
             cross sums start afresh, as the isolation's do.
+        duration_s : float
+            Its monitored running [s]: how much older the change's windows get.
 
         """
         if not (math.isfinite(u_nm) and math.isfinite(d_nm * weight)):
             u_nm = 0.0
         if changing:  # the windows before it do not age while it lasts
+            # the cross sum weighted by each window's age, as `ChangeStats.add` ages its own
+            self.x1 = keep * (self.x1 + duration_s * self.x)
             self.g_change = keep * self.g_change + weight * u_nm * u_nm
             self.b_change = keep * self.b_change + weight * d_nm * u_nm
             self.x = keep * self.x + weight * u_nm * s
@@ -125,6 +130,7 @@ class DriftNuisance:
         self.b_before = keep * (self.b_before + self.b_change) + weight * d_nm * u_nm
         self.g_change = self.b_change = 0.0
         self.x = np.zeros(self._n)
+        self.x1 = np.zeros(self._n)
 
     def profile(self, g: np.ndarray, b: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -184,10 +190,25 @@ class DriftNuisance:
             return float(b[j] / g[j, j]), 1e9 / float(g[j, j])
         return float(b_p[j] / g_p[j, j]), 1.0 / float(g_p[j, j])
 
+    def line_sums(self, j: int) -> tuple[float, float, float, float, float, float]:
+        """
+        Return the sums that fit the drift with cause j's change as a line in time.
+
+        Returns
+        -------
+        tuple of float
+            sum w s_j u, sum w tau s_j u, sum w u^2 and sum w d u over the change's windows,
+            sum w u^2 and sum w d u over every window (`ChangeStats.trend`'s ``drift``).
+
+        """
+        return (float(self.x[j]), float(self.x1[j]), self.g_change, self.b_change,
+                self.g_before + self.g_change, self.b_before + self.b_change)
+
     def state(self) -> dict[str, object]:
         """Return the sums as plain values."""
         return {'g_before': self.g_before, 'b_before': self.b_before,
-                'g_change': self.g_change, 'b_change': self.b_change, 'x': self.x.tolist()}
+                'g_change': self.g_change, 'b_change': self.b_change, 'x': self.x.tolist(),
+                'x1': self.x1.tolist()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -207,11 +228,14 @@ class DriftNuisance:
         try:
             (x,), (g_before, g_change) = read_sums(state, {'x': (self._n,)},
                                                    ('g_before', 'g_change'), 'drift nuisance')
+            # a state written before the line's cross sums: none, as the line had then
+            (x1,), _ = read_sums(state, {'x1': (self._n,)}, (), 'drift nuisance') \
+                if 'x1' in state else ([np.zeros(self._n)], [])
             b_before, b_change = (float(state[key])  # type: ignore[arg-type]
                                   for key in ('b_before', 'b_change'))
         except (KeyError, TypeError) as exc:
             raise ValueError(f'drift nuisance sums: {exc!r}') from None
         if not (math.isfinite(b_before) and math.isfinite(b_change)):
             raise ValueError('drift nuisance sums not finite')
-        self.g_before, self.b_before, self.g_change, self.b_change, self.x = \
-            g_before, b_before, g_change, b_change, x
+        self.g_before, self.b_before, self.g_change, self.b_change, self.x, self.x1 = \
+            g_before, b_before, g_change, b_change, x, x1
