@@ -308,6 +308,11 @@ def test_the_sums_survive_a_restart_and_an_older_state_loads_without_them():
     again = _isolation(16, 0.0, 0.0)
     again.load(isolation.state())
     assert again.friction_change(VP) == isolation.friction_change(VP)
+    assert again.moving(VP) == isolation.moving(VP)
+    state = isolation.state()
+    before_line = {**state, 'drift': {k: v for k, v in state['drift'].items() if k != 'x1'}}
+    again.load(before_line)  # written before the line's cross sums: the line without them
+    assert np.all(again.drift.x1 == 0.0) and again.drift.x == pytest.approx(isolation.drift.x)
     older = {key: value for key, value in isolation.state().items() if key != 'drift'}
     again.load(older)
     assert again.drift.state() == DriftNuisance(6).state()
@@ -316,6 +321,7 @@ def test_the_sums_survive_a_restart_and_an_older_state_loads_without_them():
 
 
 @pytest.mark.parametrize('bad', [{'g_before': -1.0}, {'b_change': math.nan}, {'x': [0.0] * 5},
+                                 {'x1': [0.0] * 7}, {'x1': [math.nan] * 6},
                                  {'x': [math.inf] * 6}, {'g_change': 'warm'}, {'x': None}])
 def test_malformed_drift_sums_are_refused(bad):
     state = _isolation(17, 0.8, 0.4e-3).state()
