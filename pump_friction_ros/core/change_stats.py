@@ -40,7 +40,7 @@ class ChangeStats:
     Parameters
     ----------
     causes : int
-        Number of causes (signature entries).
+        Length of a window's signature vector s (the isolation's `CAUSES`).
 
     """
 
