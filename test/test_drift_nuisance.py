@@ -166,7 +166,7 @@ def test_the_line_through_the_change_is_fitted_with_the_drift_by_least_squares()
 
 
 def _ramp(seed, drift_per_k, ramp):
-    """Return the isolation of 600 windows as the oil warms, the valve plate x1.8 from 300."""
+    """Return the isolation of 600 windows as the oil warms: from 300 on, x1.8 or a ramp to it."""
     isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
     for k, (s, u, d, changing) in enumerate(_windows(seed, 0.0, drift_per_k)):
         wear = 0.8 * ((k - 299) / 300 if ramp else 1.0) if changing else 0.0
@@ -215,9 +215,9 @@ def test_a_drift_too_small_to_learn_profiled_out_names_no_friction_for_the_other
     profiled = [_named(*case) for case in cases]
     single = [_named(*case, known=False) for case in cases]  # the temperature not known
     wrong, single_wrong = ([name == frictions[1 - truth] for name, (_, truth, _) in
-                            zip(names, cases)] for names in (profiled, single))
+                            zip(names, cases, strict=True)] for names in (profiled, single))
     right, single_right = ([name == frictions[truth] for name, (_, truth, _) in
-                            zip(names, cases)] for names in (profiled, single))
+                            zip(names, cases, strict=True)] for names in (profiled, single))
     # here 6 of 24 named wrong by the steps alone (7 right); none with the drift (10 right,
     # 10 that cannot tell, 4 gains as the single causes)
     assert sum(single_wrong) >= 3 and not any(wrong)
