@@ -111,12 +111,13 @@ class ChangeStats:
             the age tau, so negative: rising); None where the windows cannot fit a line.
 
         """
-        g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
-        b0, b1 = float(self.b[j]), float(self.b1[j])
+        a0, a1, a2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+        r0, r1 = float(self.b[j]), float(self.b1[j])
         x0, x1, g_ch, b_ch, g_u, b_u = drift or (0.0,) * 6
+        g0, g1, g2, b0, b1 = a0, a1, a2, r0, r1
         if g_u > 0.0:  # the drift's c profiled out (as `DriftNuisance.profile`)
-            g0, g1, g2 = g0 - x0 * x0 / g_u, g1 - x0 * x1 / g_u, g2 - x1 * x1 / g_u
-            b0, b1 = b0 - x0 * b_u / g_u, b1 - x1 * b_u / g_u
+            g0, g1, g2 = a0 - x0 * x0 / g_u, a1 - x0 * x1 / g_u, a2 - x1 * x1 / g_u
+            b0, b1 = r0 - x0 * b_u / g_u, r1 - x1 * b_u / g_u
         det = g0 * g2 - g1 * g1
         dof = self.count - 2.0
         if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
@@ -124,10 +125,9 @@ class ChangeStats:
         now = (g2 * b0 - g1 * b1) / det
         slope = (g0 * b1 - g1 * b0) / det
         rss = self.c - now * b0 - slope * b1
-        if g_u > 0.0:  # what the line and the drift leave of the change's windows
+        if g_u > 0.0:  # what the line and the drift c u leave of the change's windows
             c = (b_u - x0 * now - x1 * slope) / g_u
-            a0, a1, a2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
-            rss = (self.c - 2.0 * (now * float(self.b[j]) + slope * float(self.b1[j]) + c * b_ch)
+            rss = (self.c - 2.0 * (now * r0 + slope * r1 + c * b_ch)
                    + now * now * a0 + 2.0 * now * slope * a1 + slope * slope * a2
                    + 2.0 * c * (x0 * now + x1 * slope) + c * c * g_ch)
         inflation = max(1.0, rss / dof)

@@ -228,9 +228,9 @@ class DriftNuisance:
         try:
             (x,), (g_before, g_change) = read_sums(state, {'x': (self._n,)},
                                                    ('g_before', 'g_change'), 'drift nuisance')
-            # a state written before the line's cross sums: none, as the line had then
-            (x1,), _ = read_sums(state, {'x1': (self._n,)}, (), 'drift nuisance') \
-                if 'x1' in state else ([np.zeros(self._n)], [])
+            x1 = np.zeros(self._n)  # a state written before the line's cross sums: none
+            if 'x1' in state:
+                (x1,), _ = read_sums(state, {'x1': (self._n,)}, (), 'drift nuisance')
             b_before, b_change = (float(state[key])  # type: ignore[arg-type]
                                   for key in ('b_before', 'b_change'))
         except (KeyError, TypeError) as exc:
