@@ -184,7 +184,7 @@ class FaultIsolation:
         self.drift.reset()
 
     def add(self, s: np.ndarray, d_nm: float, weight: float, duration_s: float,
-            changing: bool, drift_nm: float = 0.0) -> None:
+            changing: bool, drift_nm: float = 0.0, oil_nm: float = 0.0) -> None:
         """
         Add one window, or forget the windows when no change is under way.
 
@@ -205,6 +205,9 @@ class FaultIsolation:
             The signature of a torque-constant drift not learnt: (T - T_0) times the
             torque gain's [N m / (1/K)] (0 or NaN: none possible, or the temperature not
             known).
+        oil_nm : float
+            The friction change of the oil's band at this window, where the viscosity is
+            assumed (``oil_allowance``; 0: none) [N m]: the intervals span it (`scales`).
 
         """
         keep = math.exp(-duration_s / self.settings.isolation_memory_s)
@@ -212,7 +215,7 @@ class FaultIsolation:
         if not changing:
             self.stats.clear()
             return
-        self.stats.add(s, d_nm, weight, keep, duration_s)
+        self.stats.add(s, d_nm, weight, keep, duration_s, oil_nm)
 
     def evidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
@@ -357,7 +360,10 @@ class FaultIsolation:
           level, the floor ``scale_systematic_std``); where the change still moves (the
           slope of a line through it over the memory is significant at ``attribution_z``)
           the span reaches the line's present value too: a wear still growing is larger
-          now than the memory's mean;
+          now than the memory's mean; where the viscosity is assumed and the oil has a
+          band (``oil_temperature_band_c``), each end moves out by what an oil anywhere in
+          the band moves the fit (`ChangeStats.oil_bias`): the scale is the valve plate's
+          or the oil's, and the interval must hold the valve plate's;
         * another cause named: no change, +- 1.96 times the std its own fit would have;
         * two causes that cannot be told apart: from no change to this cause's estimate;
         * a change not confirmed yet (level OK) or that no single cause stands out in: 1
@@ -403,11 +409,14 @@ class FaultIsolation:
             level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
             change = delta if delta == delta else 0.0
             low, high = _interval(change, noise * noise + floor * floor, level_rel_std)
+            oil, oil_now = self.stats.oil_bias(i)
+            if oil > 0.0:  # the oil anywhere in its band
+                low, high = low - oil, high + oil
             if confirmed and named == i:
                 line = self.moving(i)
                 if line is not None:
                     now_low, now_high = _interval(line[0], line[1] + floor * floor, level_rel_std)
-                    low, high = min(low, now_low), max(high, now_high)
+                    low, high = min(low, now_low - oil_now), max(high, now_high + oil_now)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
                 low, high = min(0.0, low), max(0.0, high)
             else:  # no change confirmed: 1, +- whatever might be there
@@ -421,7 +430,8 @@ class FaultIsolation:
         st = self.stats
         return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
                 'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
-                'b1': st.b1.tolist(), 'drift': self.drift.state()}
+                'b1': st.b1.tolist(), 'bv': st.bv.tolist(), 'bv1': st.bv1.tolist(),
+                'drift': self.drift.state()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -446,6 +456,9 @@ class FaultIsolation:
         st = self.stats
         st.g, st.b, st.c, st.count = g, b, c, count
         st.g1, st.g2, st.b1 = g1, g2, b1
+        # the oil band's sums came later still (a file without them: no band until now)
+        (st.bv, st.bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
+            if 'bv' in state else ([np.zeros(_N)] * 2, [])
         st.windows = int(state['windows'])  # type: ignore[call-overload]
         self.drift.reset()  # the drift's sums came later still (without: from the next window)
         if 'drift' in state:

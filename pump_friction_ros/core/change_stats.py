@@ -21,7 +21,9 @@ c = sum w d^2 and their count. Cause j alone (d = delta_j s_j) fits with delta_j
 g_jj and explains T_j = b_j^2 / g_jj of c (`glr`, Basseville & Nikiforov 1993, ch. 7); what
 the best single cause leaves, per degree of freedom, is the lack of fit (`lack_of_fit`,
 at least the noise). Each cause's sums weighted by the windows' age too fit a change
-moving along a line in time (`trend`).
+moving along a line in time (`trend`). Where the viscosity is assumed, the oil may sit
+anywhere in its band (``oil_allowance``): sum w v s, with v the band's friction change at
+each window, bounds how far that moves each fit (`oil_bias`).
 """
 
 from __future__ import annotations
@@ -60,8 +62,12 @@ class ChangeStats:
         self.g1 = np.zeros(self._n)
         self.g2 = np.zeros(self._n)
         self.b1 = np.zeros(self._n)
+        # per cause, sum w v s and its age-weighted sum: an oil offset within the band
+        self.bv = np.zeros(self._n)
+        self.bv1 = np.zeros(self._n)
 
-    def add(self, s: np.ndarray, d: float, w: float, keep: float, age_s: float) -> None:
+    def add(self, s: np.ndarray, d: float, w: float, keep: float, age_s: float,
+            oil_nm: float = 0.0) -> None:
         """
         Add one window: the older ones kept by ``keep``, aged by its running.
 
@@ -77,6 +83,9 @@ class ChangeStats:
             exp(-duration / isolation_memory_s) [-].
         age_s : float
             Its monitored running [s].
+        oil_nm : float
+            The friction change of the oil's band at this window (``oil_allowance``; 0:
+            none, the viscosity measured or no band) [N m].
 
         """
         # the older windows age by the new one's running: tau -> tau + age_s
@@ -84,6 +93,8 @@ class ChangeStats:
         self.g2 = keep * (self.g2 + 2.0 * age_s * self.g1 + age_s * age_s * g0)
         self.g1 = keep * (self.g1 + age_s * g0)
         self.b1 = keep * (self.b1 + age_s * self.b)
+        self.bv1 = keep * (self.bv1 + age_s * self.bv)
+        self.bv = keep * self.bv + w * oil_nm * s
         self.g = keep * self.g + w * np.outer(s, s)
         self.b = keep * self.b + w * d * s
         self.c = keep * self.c + w * d * d
@@ -132,6 +143,37 @@ class ChangeStats:
                    + 2.0 * c * (x0 * now + x1 * slope) + c * c * g_ch)
         inflation = max(1.0, rss / dof)
         return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
+
+    def oil_bias(self, j: int) -> tuple[float, float]:
+        """
+        Return how far an oil offset within the band can move cause j's change and its line.
+
+        An oil that sits off commissioning's temperature by up to the band adds e v to
+        every window's change, v the band's friction change there (``oil_allowance``) and
+        e in [-1, 1] (the oil moves slowly: one e over the memory). Least squares carries e v
+        into the change as e sum w v s_j / sum w s_j^2 and into the line's present value
+        (`trend`) as e times the line fitted to v alone.
+
+        Parameters
+        ----------
+        j : int
+            The cause.
+
+        Returns
+        -------
+        tuple of float
+            The largest shift of the change and of the line's present value [-] (0, 0:
+            no band, or no signature of j).
+
+        """
+        g0 = float(self.g[j, j])
+        if not (g0 > 0.0 and self.bv[j]):
+            return 0.0, 0.0
+        r0, r1 = float(self.bv[j]), float(self.bv1[j])
+        g1, g2 = float(self.g1[j]), float(self.g2[j])
+        det = g0 * g2 - g1 * g1
+        now = abs((g2 * r0 - g1 * r1) / det) if det > 1e-9 * g0 * g2 else 0.0
+        return abs(r0) / g0, now
 
     def glr(self) -> np.ndarray:
         """Return each cause's GLR statistic b_j^2 / g_jj [-] (NaN: no signature of it)."""

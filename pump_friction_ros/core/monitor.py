@@ -383,7 +383,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         if self._gain_follow is not None and self._gain_follow.max_per_k > 0.0:
             drift = float(sig[_TORQUE_GAIN]) * (temperature - baseline.temperature_c)
         self.isolation.add(sig, d, 1.0 / var, duration,
-                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0, drift)
+                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0, drift,
+                           viscous)
         if self._gain_follow is not None:  # every window: a drift shows before the change
             self._gain_follow.add(sig, d, 1.0 / var, duration,
                                   temperature - baseline.temperature_c)

@@ -208,7 +208,8 @@ class EstimatorConfig:
     oil_temperature_band_c: float = _param(
         0.0, "viscosity_source parameter: the oil temperature's swing from commissioning "
         '[K]; its friction change (oil_viscosity_40c/100c law) is not a change of the pump, '
-        'and hides one as small (docs/monitor.md); 0: none.', 0.0, 100.0)
+        "hides one as small, and widens a scale's interval by what it moves the reading "
+        '(docs/monitor.md); 0: none.', 0.0, 100.0)
     torque_constant_drift_per_k: float = _param(
         0.0, "Drift of the drive's torque constant with temperature taken as normal [1/K] "
         '(NdFeB: 1.2e-3); times the temperature change from commissioning (topic, else the '
