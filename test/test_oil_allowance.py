@@ -77,6 +77,20 @@ SLOPE = 1e-4
 """The band's friction change per speed in these tests [N m / (rad/s)]: a film shear."""
 
 
+def oil_window(rng):
+    """
+    Draw one window of these tests' pump: speed, modelled frictions, direction, torque.
+
+    Returns (speed [rad/s], valve-plate and other friction [N m], direction, theoretical
+    torque [N m], the baseline's regressors).
+    """
+    speed = rng.uniform(50.0, 900.0)
+    vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    th = rng.uniform(-3.0, 3.0)
+    return speed, vp, other, sign, th, baseline_regressors(vp, other, th * sign, sign, 0.0)
+
+
 def _swing(oil, amplitude, seed=4, windows=3000):
     """
     Run a pump as learnt at commissioning whose viscous friction then swings with the oil.
@@ -89,11 +103,7 @@ def _swing(oil, amplitude, seed=4, windows=3000):
     mon = _monitor(oil)
     t, alarmed, n = 0.0, False, WINDOW_SAMPLES
     for _ in range(windows):
-        speed = rng.uniform(50.0, 900.0)
-        vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
-        sign = 1.0 if rng.random() < 0.5 else -1.0
-        th = rng.uniform(-3.0, 3.0)
-        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
+        speed, vp, other, sign, th, h = oil_window(rng)
         wall = 10.0 * t
         swing = amplitude * SLOPE * speed * math.sin(2.0 * math.pi * wall / 1200.0) \
             if wall > 600.0 else 0.0

@@ -17,21 +17,14 @@
 import math
 
 import numpy as np
-from pump_friction_ros.core.attribution import AttributionSettings, FaultIsolation, Verdict
-from pump_friction_ros.core.baseline import baseline_regressors
+from pump_friction_ros.core.attribution import FaultIsolation, Verdict
 from pump_friction_ros.core.change_stats import ChangeStats
-from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
-from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
-from pump_friction_ros.core.oil_allowance import OilAllowance
+from pump_friction_ros.core.monitor import OK
 import pytest
 
+from .test_oil_allowance import _monitor, BAND, DT, oil_window, SLOPE, TRUTH, WINDOW_SAMPLES
+
 Z95 = 1.959963984540054
-SLOPE = 1e-4
-"""The band's friction change per speed [N m / (rad/s)]: a film shear, as test_oil_allowance."""
-BAND = OilAllowance([0.0, 1000.0], [0.0, 1000.0 * SLOPE])
-TRUTH = np.array([0.2, -0.15, 0.03, 0.01, -0.03, 1.2e-4])  # a pump unlike its model
-WINDOW_SAMPLES = 250
-DT = 1e-3
 
 
 def _windows(seed, n=400):
@@ -82,12 +75,6 @@ def test_without_a_band_nothing_moves():
     assert st.oil_bias(0) == (0.0, 0.0)
 
 
-def _monitor(oil):
-    config = EstimatorConfig()
-    return WearMonitor(settings_view(config, MonitorSettings),
-                       settings_view(config, AttributionSettings), 0.0, True, 0.0, oil)
-
-
 def _wear_in_other_oil(oil, delta, offset, seed, windows=3000):
     """
     Run a pump as learnt at commissioning, then worn with the oil off commissioning's.
@@ -101,11 +88,7 @@ def _wear_in_other_oil(oil, delta, offset, seed, windows=3000):
     mon = _monitor(oil)
     t, n = 0.0, WINDOW_SAMPLES
     for _ in range(windows):
-        speed = rng.uniform(50.0, 900.0)
-        vp, other = 0.05 + 4e-4 * speed, 0.1 + rng.uniform(0.0, 0.4)
-        sign = 1.0 if rng.random() < 0.5 else -1.0
-        th = rng.uniform(-3.0, 3.0)
-        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
+        speed, vp, other, sign, th, h = oil_window(rng)
         worn = t > 60.0
         e = float(h @ TRUTH) + rng.normal(0.0, 0.01) + (
             delta * (1.0 + TRUTH[0]) * vp + offset * SLOPE * speed if worn else 0.0)
