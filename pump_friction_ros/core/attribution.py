@@ -360,10 +360,7 @@ class FaultIsolation:
           level, the floor ``scale_systematic_std``); where the change still moves (the
           slope of a line through it over the memory is significant at ``attribution_z``)
           the span reaches the line's present value too: a wear still growing is larger
-          now than the memory's mean; where the viscosity is assumed and the oil has a
-          band (``oil_temperature_band_c``), each end moves out by what an oil anywhere in
-          the band moves the fit (`ChangeStats.oil_bias`): the scale is the valve plate's
-          or the oil's, and the interval must hold the valve plate's;
+          now than the memory's mean;
         * another cause named: no change, +- 1.96 times the std its own fit would have;
         * two causes that cannot be told apart: from no change to this cause's estimate;
         * a change not confirmed yet (level OK) or that no single cause stands out in: 1
@@ -373,6 +370,12 @@ class FaultIsolation:
         * no change under way (every CUSUM at zero): 1, the interval spanning any change
           the detection does not see. A fault below it is there, unseen: a scale of 1 +-
           the floor alone would claim that it is not.
+
+        In every case but another cause named, where the viscosity is assumed and the oil
+        has a band (``oil_temperature_band_c``), each end of the fit's span (and of the
+        line's) first moves out by what an oil anywhere in the band moves it
+        (`ChangeStats.oil_bias`): the reading is the valve plate's or the oil's, and the
+        interval must hold the valve plate's.
 
         Parameters
         ----------
@@ -416,7 +419,9 @@ class FaultIsolation:
                 line = self.moving(i)
                 if line is not None:
                     now_low, now_high = _interval(line[0], line[1] + floor * floor, level_rel_std)
-                    low, high = min(low, now_low - oil_now), max(high, now_high + oil_now)
+                    if oil_now > 0.0:
+                        now_low, now_high = now_low - oil_now, now_high + oil_now
+                    low, high = min(low, now_low), max(high, now_high)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
                 low, high = min(0.0, low), max(0.0, high)
             else:  # no change confirmed: 1, +- whatever might be there
@@ -453,12 +458,13 @@ class FaultIsolation:
         # the age-weighted sums came later (a file without them: from the next window on)
         (g1, g2, b1), _ = read_sums(state, {'g1': (_N,), 'g2': (_N,), 'b1': (_N,)}, (),
                                     'isolation') if 'g1' in state else ([np.zeros(_N)] * 3, [])
+        # the oil band's sums came later still (a file without them: no band until now)
+        (bv, bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
+            if 'bv' in state else ([np.zeros(_N)] * 2, [])
         st = self.stats
         st.g, st.b, st.c, st.count = g, b, c, count
         st.g1, st.g2, st.b1 = g1, g2, b1
-        # the oil band's sums came later still (a file without them: no band until now)
-        (st.bv, st.bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
-            if 'bv' in state else ([np.zeros(_N)] * 2, [])
+        st.bv, st.bv1 = bv, bv1
         st.windows = int(state['windows'])  # type: ignore[call-overload]
         self.drift.reset()  # the drift's sums came later still (without: from the next window)
         if 'drift' in state:

@@ -150,9 +150,11 @@ class ChangeStats:
 
         An oil that sits off commissioning's temperature by up to the band adds e v to
         every window's change, v the band's friction change there (``oil_allowance``) and
-        e in [-1, 1] (the oil moves slowly: one e over the memory). Least squares carries e v
-        into the change as e sum w v s_j / sum w s_j^2 and into the line's present value
-        (`trend`) as e times the line fitted to v alone.
+        e in [-1, 1]. Least squares carries e v into the change as e sum w v s_j / sum w
+        s_j^2 (for a friction, whose s_j and v are both >= 0, a bound for any e per window)
+        and into the line's present value (`trend`) as e times the line fitted to v alone
+        (a bound for one e over the memory: an oil that swings within the memory can move
+        the line further).
 
         Parameters
         ----------
@@ -162,8 +164,9 @@ class ChangeStats:
         Returns
         -------
         tuple of float
-            The largest shift of the change and of the line's present value [-] (0, 0:
-            no band, or no signature of j).
+            The largest shift of the change and of the line's present value, in the
+            cause's units (relative [-] for the frictions); 0, 0: no band, or no signature
+            of j; the line's 0 where the windows cannot fit a line.
 
         """
         g0 = float(self.g[j, j])
