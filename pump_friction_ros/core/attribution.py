@@ -260,12 +260,16 @@ class FaultIsolation:
 
     def _friction_pair(self, t: np.ndarray) -> tuple[int, int, np.ndarray, float]:
         # which friction: `evidence`'s T (t) of valve plate and other friction with the drift
-        # profiled out, the better first, and their cosine so
+        # profiled out, each cause's change a line in time where the windows fit one for
+        # both (`ChangeStats.line_glr`), the better first, and their cosine so
         stats = self.stats
         g, b, told = self.drift.profile(stats.g, stats.b)
+        lines = [stats.line_glr(i, self.drift.line_sums(i)) for i in (_VP, _OTHER)]
         t = t.copy()
         for i in (_VP, _OTHER):
-            t[i] = b[i] ** 2 / g[i, i] / stats.lack_of_fit() if told[i] else 0.0
+            line = lines[i] if None not in lines else None
+            fit = line if line is not None else b[i] ** 2 / g[i, i]
+            t[i] = fit / stats.lack_of_fit() if told[i] else 0.0
         cos = float(g[_VP, _OTHER] / math.sqrt(g[_VP, _VP] * g[_OTHER, _OTHER])) \
             if told[_VP] and told[_OTHER] else 0.0
         return (_VP, _OTHER, t, cos) if t[_VP] >= t[_OTHER] else (_OTHER, _VP, t, cos)

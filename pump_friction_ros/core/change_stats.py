@@ -122,13 +122,10 @@ class ChangeStats:
             the age tau, so negative: rising); None where the windows cannot fit a line.
 
         """
+        g0, g1, g2, b0, b1 = self._line_sums(j, drift)
         a0, a1, a2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
         r0, r1 = float(self.b[j]), float(self.b1[j])
         x0, x1, g_ch, b_ch, g_u, b_u = drift or (0.0,) * 6
-        g0, g1, g2, b0, b1 = a0, a1, a2, r0, r1
-        if g_u > 0.0:  # the drift's c profiled out (as `DriftNuisance.profile`)
-            g0, g1, g2 = a0 - x0 * x0 / g_u, a1 - x0 * x1 / g_u, a2 - x1 * x1 / g_u
-            b0, b1 = r0 - x0 * b_u / g_u, r1 - x1 * b_u / g_u
         det = g0 * g2 - g1 * g1
         dof = self.count - 2.0
         if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and dof >= 1.0):
@@ -143,6 +140,52 @@ class ChangeStats:
                    + 2.0 * c * (x0 * now + x1 * slope) + c * c * g_ch)
         inflation = max(1.0, rss / dof)
         return now, inflation * g2 / det, slope / math.sqrt(inflation * g0 / det)
+
+    def _line_sums(self, j: int, drift: tuple[float, ...]
+                   ) -> tuple[float, float, float, float, float]:
+        # cause j's sums for a line in time (g0, g1, g2 over 1 and the age tau; b0, b1 of
+        # the change), the drift's c profiled out where it has any (as
+        # `DriftNuisance.profile`)
+        g0, g1, g2 = float(self.g[j, j]), float(self.g1[j]), float(self.g2[j])
+        b0, b1 = float(self.b[j]), float(self.b1[j])
+        x0, x1, _, _, g_u, b_u = drift or (0.0,) * 6
+        if g_u > 0.0:
+            g0, g1, g2 = g0 - x0 * x0 / g_u, g1 - x0 * x1 / g_u, g2 - x1 * x1 / g_u
+            b0, b1 = b0 - x0 * b_u / g_u, b1 - x1 * b_u / g_u
+        return g0, g1, g2, b0, b1
+
+    def line_glr(self, j: int, drift: tuple[float, ...] = ()) -> float | None:
+        """
+        Return cause j's GLR statistic for a change along a line in time, against none.
+
+        The change delta(tau) = now + slope tau (`trend`'s line, a drift too small to be
+        learnt profiled out where ``drift`` has one) explains T = r^T G^-1 r of the
+        windows' sum w d^2, with G = [[g0, g1], [g1, g2]] the sums of w s_j^2 weighted by
+        1, tau and tau^2 and r = (b0, b1) those of w s_j d by 1 and tau (Basseville &
+        Nikiforov 1993, ch. 7, with two parameters). Two causes each fitted so are compared
+        on equal terms: a wear that grows over the memory, or a step whose signature's
+        share moves as the oil warms, no longer favours the cause whose signature happens
+        to follow the change's time course.
+
+        Parameters
+        ----------
+        j : int
+            The cause.
+        drift : tuple of float
+            As `trend`'s.
+
+        Returns
+        -------
+        float or None
+            T [-] (noise units); None where the windows cannot fit a line (too few, or no
+            spread of age).
+
+        """
+        g0, g1, g2, b0, b1 = self._line_sums(j, drift)
+        det = g0 * g2 - g1 * g1
+        if not (g0 > 0.0 and det > 1e-9 * g0 * g2 and self.count - 2.0 >= 1.0):
+            return None
+        return (g2 * b0 * b0 - 2.0 * g1 * b0 * b1 + g0 * b1 * b1) / det
 
     def oil_bias(self, j: int) -> tuple[float, float]:
         """
