@@ -40,7 +40,7 @@ from .errors import OutputError
 
 __all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
            'looks_like_plots', 'raise_if_interrupted', 'remove_empty_folders', 'sigint_held',
-           'sigint_ignored', 'sigint_kept']
+           'sigint_ignored', 'sigint_kept', 'sigterm_kept']
 
 _SIGINT_SEEN: list[int] = []  # Ctrl-Cs received through `sigint_kept`'s handler
 
@@ -68,11 +68,40 @@ def sigint_kept() -> None:
     if threading.current_thread() is threading.main_thread() \
             and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _note_and_raise)
+    _quiet_swallowed_stops()
+
+
+def _note_and_exit(signum: int, frame: object) -> None:
+    """Note the SIGTERM, then exit as its default does (status 128 + 15), unwinding."""
+    _SIGINT_SEEN.append(signum)
+    raise SystemExit(128 + signum)
+
+
+def sigterm_kept() -> None:
+    """
+    Never lose a SIGTERM in a worker process; called once as the worker starts.
+
+    The fleet's parent stops its workers with SIGTERM (after a Ctrl-C, say), and a worker
+    exits by unwinding, which discards its staged outputs. Raised in a finaliser (a NumPy
+    ``NpzFile.__del__`` collected at that instant, say: CI on e782729) the exit only prints
+    "Exception ignored" and the worker goes on. As `sigint_kept` does for Ctrl-C: the
+    handler notes the signal before raising, a stop that a finaliser swallowed is not
+    printed, and `raise_if_interrupted` raises at the worker's next check (between batches,
+    before any output is committed).
+    """
+    _SIGINT_SEEN.clear()
+    signal.signal(signal.SIGTERM, _note_and_exit)
+    _quiet_swallowed_stops()
+
+
+def _quiet_swallowed_stops() -> None:
+    """Print no "Exception ignored" for a Ctrl-C or SIGTERM noted: it is raised again."""
     if getattr(sys.unraisablehook, '_previous', None) is None:  # installed once
         previous = sys.unraisablehook
 
         def quiet(unraisable: sys.UnraisableHookArgs) -> None:
-            if not (_SIGINT_SEEN and isinstance(unraisable.exc_value, KeyboardInterrupt)):
+            if not (_SIGINT_SEEN and isinstance(unraisable.exc_value,
+                                                (KeyboardInterrupt, SystemExit))):
                 previous(unraisable)
 
         quiet._previous = previous  # type: ignore[attr-defined]
@@ -81,7 +110,7 @@ def sigint_kept() -> None:
 
 def raise_if_interrupted() -> None:
     """
-    Raise KeyboardInterrupt if a Ctrl-C came and was swallowed (`sigint_kept`).
+    Raise KeyboardInterrupt if a Ctrl-C (or a worker's SIGTERM) came and was swallowed.
 
     Raises
     ------

@@ -526,6 +526,51 @@ def test_ctrl_c_during_a_fleet_leaves_nothing(env, tmp_path, long_bag, group):
     assert not res.exists(), listing(res)
 
 
+SIGTERM_IN_A_FINALISER = '''
+import os, signal, sys
+from pump_friction_ros.app import cli
+from pump_friction_ros.bags import replay
+
+
+class CollectedDuringTheSigterm:
+    """An object whose finaliser runs when the parent's SIGTERM arrives (an NpzFile, say)."""
+
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGTERM)  # raised in __del__: Python only prints it
+
+
+run = replay._run
+
+
+def run_with_a_sigterm_in_a_finaliser(*args, **kwargs):
+    CollectedDuringTheSigterm()
+    return run(*args, **kwargs)
+
+
+replay._run = run_with_a_sigterm_in_a_finaliser  # in each fleet worker (forked)
+sys.exit(cli.main(sys.argv[1:]))
+'''
+
+
+def test_a_sigterm_that_lands_in_a_workers_finaliser_still_stops_it_and_leaves_nothing(
+        env, tmp_path, long_bag):
+    # CI, e782729: the parent's SIGTERM (after a Ctrl-C) landed in a worker's NpzFile.__del__,
+    # where Python printed "Exception ignored ... SystemExit" and the worker replayed on. Each
+    # worker here is sent one there: it stops at the replay's next check, quietly, exit 143
+    import shutil
+    for name in ('one', 'two'):
+        shutil.copytree(long_bag, tmp_path / 'fleet' / name)
+    res = tmp_path / 'res'
+    proc = subprocess.run([sys.executable, '-c', SIGTERM_IN_A_FINALISER, 'replay',
+                           str(tmp_path / 'fleet'), '--workers', '2', '--out', str(res / 'bags'),
+                           '--csv', str(res / 'csv')],
+                          capture_output=True, text=True, timeout=120, env=env, check=False)
+    assert (proc.returncode, proc.stderr) == (2, '')
+    for name in ('one', 'two'):
+        assert f'{name}: FAILED: the worker process died (exit code 143)' in proc.stdout
+    assert not res.exists(), listing(res)
+
+
 # -- pump files: any valid piston count works, physical ranges are enforced -----------------
 
 

@@ -50,7 +50,7 @@ from ..core.estimator import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
-from ..staging import raise_if_interrupted, remove_empty_folders, sigint_held
+from ..staging import raise_if_interrupted, remove_empty_folders, sigint_held, sigterm_kept
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',
            'plan_outputs', 'run_job', 'run_jobs']
@@ -321,16 +321,16 @@ def run_jobs(jobs: list[ReplayJob], workers: int = 1, dask_address: str | None =
     return _run_local(jobs, min(workers, len(jobs)))
 
 
-def _exit_on_sigterm(signum: int, frame: Any) -> None:
-    raise SystemExit(128 + signum)  # unwinds the replay, which discards its staged outputs
-
-
 def _worker(conn: Any, job: ReplayJob) -> None:
     """Replay one bag (in a fleet worker process) and send its summary to the parent."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the parent, which stops us
-    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    # SIGTERM unwinds the replay, which discards its staged outputs; one that a finaliser
+    # swallowed stops it at its next check (`sigterm_kept`)
+    sigterm_kept()
     try:
         conn.send(run_job(job))
+    except KeyboardInterrupt:  # that check: exit as the SIGTERM would have
+        raise SystemExit(128 + signal.SIGTERM) from None
     except OSError:
         pass  # the parent is gone
     finally:
@@ -367,7 +367,7 @@ def _run_local(jobs: list[ReplayJob], workers: int) -> list[ReplaySummary]:
                 stop_process(proc)
                 if results[index] is None:
                     results[index] = ReplaySummary(
-                        bag=jobs[index].bag,
+                        bag=jobs[index].bag, label=jobs[index].label,
                         error=f'the worker process died (exit code {proc.exitcode})')
     except BaseException:
         for conn, (_, proc) in running.items():  # interrupted: stop what still runs

@@ -52,7 +52,10 @@ deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 A friction cause's change is fitted together with a torque-constant drift too small to have
 been learnt (``drift_nuisance``), where the temperature topic makes one possible; so is the
 choice between the two frictions once the change is friction (their signatures correlate
-0.97-0.99 on a load-driven cycle, where the part of the drift each takes decides). The
+0.97-0.99 on a load-driven cycle, where the part of the drift each takes decides), each
+cause's change fitted as a line in time (`ChangeStats.line_glr`): on a warming oil the
+valve plate's share of the signatures falls, and a wear growing meanwhile would otherwise
+look like the other friction's steady step. The
 reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
 still moving (a line through it over the memory, `FaultIsolation.moving`) up to its present
 value, and, until one cause is confirmed, no change as well as the change that the
