@@ -133,13 +133,16 @@ def sigint_held() -> Iterator[None]:
     start and its own handler setup cannot raise KeyboardInterrupt in it), and in the main
     thread Python's handler is swapped for one that only notes the signal (another thread
     may receive it). A Ctrl-C noted meanwhile is handed to the previous handler at the end.
+    SIGTERM (the fleet's stop of a worker, `sigterm_kept`) is blocked too, and delivered as
+    the mask is restored: a worker stopped mid-commit exits once its output is in place, not
+    between the old one's removal and the new one's rename.
     """
     noted: list[int] = []
     previous = signal.getsignal(signal.SIGINT)
     in_main = threading.current_thread() is threading.main_thread() and previous is not None
     if in_main:  # (None: a handler not set from Python, left alone)
         signal.signal(signal.SIGINT, lambda signum, _: noted.append(signum))
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         yield
     finally:

@@ -473,30 +473,35 @@ def test_a_second_ctrl_c_while_reporting_the_first_still_exits_130_with_one_line
     assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
 
 
-CTRL_C_IN_A_FINALISER = '''
+SIGNAL_IN_A_FINALISER = '''
 import os, signal, sys
 from pump_friction_ros.app import cli
 from pump_friction_ros.bags import replay
 
+SIGNAL = signal.{signal}
 
-class CollectedDuringTheCtrlC:
-    """An object whose finaliser runs when the Ctrl-C arrives (e.g. a pipe's end)."""
+
+class CollectedDuringTheSignal:
+    """An object whose finaliser runs when the signal arrives (a pipe's end, an NpzFile)."""
 
     def __del__(self):
-        os.kill(os.getpid(), signal.SIGINT)  # raised in __del__: Python only prints it
+        os.kill(os.getpid(), SIGNAL)  # raised in __del__: Python only prints it
 
 
 run = replay._run
 
 
-def run_with_a_ctrl_c_in_a_finaliser(*args, **kwargs):
-    CollectedDuringTheCtrlC()
+def run_with_the_signal_in_a_finaliser(*args, **kwargs):
+    CollectedDuringTheSignal()
     return run(*args, **kwargs)
 
 
-replay._run = run_with_a_ctrl_c_in_a_finaliser
+replay._run = run_with_the_signal_in_a_finaliser  # (in a fleet, in each forked worker)
 sys.exit(cli.main(sys.argv[1:]))
 '''
+CTRL_C_IN_A_FINALISER = SIGNAL_IN_A_FINALISER.format(signal='SIGINT')
+SIGTERM_IN_A_FINALISER = SIGNAL_IN_A_FINALISER.format(signal='SIGTERM')
+
 
 
 def test_a_ctrl_c_that_lands_in_a_finaliser_still_interrupts_and_leaves_nothing(
@@ -524,32 +529,6 @@ def test_ctrl_c_during_a_fleet_leaves_nothing(env, tmp_path, long_bag, group):
                                    res / 'bags', '--csv', res / 'csv'], res, group=group)
     assert (code, err) == (130, 'pump_friction: interrupted\n')
     assert not res.exists(), listing(res)
-
-
-SIGTERM_IN_A_FINALISER = '''
-import os, signal, sys
-from pump_friction_ros.app import cli
-from pump_friction_ros.bags import replay
-
-
-class CollectedDuringTheSigterm:
-    """An object whose finaliser runs when the parent's SIGTERM arrives (an NpzFile, say)."""
-
-    def __del__(self):
-        os.kill(os.getpid(), signal.SIGTERM)  # raised in __del__: Python only prints it
-
-
-run = replay._run
-
-
-def run_with_a_sigterm_in_a_finaliser(*args, **kwargs):
-    CollectedDuringTheSigterm()
-    return run(*args, **kwargs)
-
-
-replay._run = run_with_a_sigterm_in_a_finaliser  # in each fleet worker (forked)
-sys.exit(cli.main(sys.argv[1:]))
-'''
 
 
 def test_a_sigterm_that_lands_in_a_workers_finaliser_still_stops_it_and_leaves_nothing(

@@ -123,3 +123,34 @@ def test_a_valve_plate_wear_growing_on_warming_oil_is_named_the_valve_plate(seed
 @pytest.mark.parametrize('ramp', [False, True])
 def test_steps_and_ramps_of_either_friction_are_named_right(seed, truth, ramp):
     assert _isolation(10 + seed, truth, ramp, -0.3e-3).verdict()[0] == FRICTIONS[truth]
+
+
+def test_with_one_age_for_every_window_the_choice_is_a_step_per_cause():
+    # no running between the windows: no line can be fitted, and both causes fall back to
+    # a step against the bias and the drift (`friction_bias`), neither fitted with more
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    for s, u, d, changing in _windows(4, VP, False, 0.3e-3):
+        isolation.add(s, d, NOISE_NM ** -2, 0.0, changing, u)
+    st = isolation.stats
+    assert st.line_glr(VP, isolation.drift.line_sums(VP)) is None
+    steps = [isolation.bias.glr(i, False) / st.lack_of_fit() for i in (VP, OTHER)]
+    j, k, t, _ = isolation._friction_pair(isolation.evidence()[0])
+    assert (j, k) == (VP, OTHER)
+    assert (t[VP], t[OTHER]) == pytest.approx(steps, rel=1e-12)
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_a_state_saved_before_the_drifts_age_weighted_sum_loads_without_a_line_that_misleads(
+        seed):
+    # a state written between the line's sums (g1, g2, b1) and the drift's cross sum x1: the
+    # line would be fitted with x1 = 0 against g1 != 0 and could name the valve plate for an
+    # other friction's step. Loaded, the windows count as of one age, as x1's zeros say
+    isolation = _isolation(seed, OTHER, False, 0.3e-3, windows=1000)
+    state = isolation.state()
+    state['drift'] = {key: value for key, value in state['drift'].items() if key != 'x1'}
+    again = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    again.load(state)
+    assert not (again.stats.g1.any() or again.stats.g2.any() or again.stats.b1.any())
+    for s, u, d, changing in list(_windows(seed, OTHER, False, 0.3e-3))[1000:1200]:
+        again.add(s, d, NOISE_NM ** -2, DURATION_S, changing, u)
+    assert again.verdict()[0] == 'other_friction'

@@ -262,6 +262,23 @@ def test_an_interrupted_fleet_stops_its_workers_and_leaves_no_partial_output(tmp
     assert leftovers == ['0_fast']  # the stopped replay discarded its staged output
 
 
+def sigterm_while_held(conn):
+    from pump_friction_ros.staging import sigint_held
+    events = []
+    signal.signal(signal.SIGTERM, lambda signum, frame: events.append('terminated'))
+    with sigint_held():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.05)  # the signal is pending, not handled
+        events.append('still held')
+    events.append('released')
+    conn.send(events)
+
+
+def test_a_sigterm_during_a_held_moment_is_delivered_after_it():
+    # a worker stopped while it moves its output into place exits once it is there
+    assert run_bounded(sigterm_while_held) == ['still held', 'terminated', 'released']
+
+
 def test_fleet_workers_ignore_ctrl_c_and_results_keep_job_order(tmp_path, bags):
     jobs = [ReplayJob(bag=str(b), config=CONFIG) for b in bags * 2]
     summaries = run_jobs(jobs, workers=3)

@@ -327,10 +327,12 @@ def _worker(conn: Any, job: ReplayJob) -> None:
     # SIGTERM unwinds the replay, which discards its staged outputs; one that a finaliser
     # swallowed stops it at its next check (`sigterm_kept`)
     sigterm_kept()
+    # started under `sigint_held`: a signal that came meanwhile is delivered now, handled
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         conn.send(run_job(job))
     except KeyboardInterrupt:  # that check: exit as the SIGTERM would have
-        raise SystemExit(128 + signal.SIGTERM) from None
+        raise SystemExit(128 + signal.SIGTERM)  # (its context: the check, never shown)
     except OSError:
         pass  # the parent is gone
     finally:
@@ -348,9 +350,10 @@ def _run_local(jobs: list[ReplayJob], workers: int) -> list[ReplaySummary]:
             for index, job in queued:
                 conn, child = ctx.Pipe(duplex=False)
                 proc = ctx.Process(target=_worker, args=(child, job), daemon=True)
-                proc.start()
+                with sigint_held():  # the worker's handlers are set before a signal lands
+                    proc.start()
+                    running[conn] = (index, proc)  # a Ctrl-C held meanwhile stops it too
                 child.close()
-                running[conn] = (index, proc)
                 if len(running) >= workers:
                     break
             if not running:

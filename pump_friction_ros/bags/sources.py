@@ -81,7 +81,8 @@ def child_signals() -> None:
     """In a helper process: default SIGTERM, and Ctrl-C left to the parent (it stops us)."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # see `staging.sigint_held`
+    # started under `staging.sigint_held`: both signals blocked until now
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
 
 
 def start_helper(proc: Any, child_end: Any, on_failure: Callable[[], None]) -> None:

@@ -50,16 +50,13 @@ The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standar
 deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 ``scale_systematic_std``: systematic model error does not average away with more windows.
 A friction cause's change is fitted together with a torque-constant drift too small to have
-been learnt (``drift_nuisance``), where the temperature topic makes one possible; so is the
-choice between the two frictions once the change is friction (their signatures correlate
-0.97-0.99 on a load-driven cycle, where the part of the drift each takes decides), each
-cause's change fitted as a line in time (`ChangeStats.line_glr`): on a warming oil the
-valve plate's share of the signatures falls, and a wear growing meanwhile would otherwise
-look like the other friction's steady step. The
-reported scales (`FaultIsolation.scales`) span what the data do not rule out: a change
-still moving (a line through it over the memory, `FaultIsolation.moving`) up to its present
-value, and, until one cause is confirmed, no change as well as the change that the
-detection does not see.
+been learnt (``drift_nuisance``), where the temperature topic makes one possible. Which
+friction changed (their signatures correlate 0.97-0.99 on a load-driven cycle) is told
+with each one's change a line in time, against the drift and a friction bias the baseline
+had before the change (``friction_bias``). The reported scales (`FaultIsolation.scales`)
+span what the data do not rule out: a change still moving (a line through it over the
+memory, `FaultIsolation.moving`) up to its present value, and, until one cause is
+confirmed, no change as well as the change that the detection does not see.
 """
 
 from __future__ import annotations
@@ -72,6 +69,7 @@ import numpy as np
 from .baseline import Baseline, read_sums
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
+from .friction_bias import FrictionBias
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -180,11 +178,13 @@ class FaultIsolation:
         self.viscosity_assumed = viscosity_assumed
         self.stats = ChangeStats(_N)
         self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
+        self.bias = FrictionBias()  # what the baseline mispredicted before the change
 
     def reset(self) -> None:
         """Forget every window."""
         self.stats.clear()
         self.drift.reset()
+        self.bias.reset()
 
     def add(self, s: np.ndarray, d_nm: float, weight: float, duration_s: float,
             changing: bool, drift_nm: float = 0.0, oil_nm: float = 0.0) -> None:
@@ -215,6 +215,7 @@ class FaultIsolation:
         """
         keep = math.exp(-duration_s / self.settings.isolation_memory_s)
         self.drift.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
+        self.bias.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
         if not changing:
             self.stats.clear()
             return
@@ -262,20 +263,33 @@ class FaultIsolation:
         return delta, math.sqrt(stats.lack_of_fit() * var)
 
     def _friction_pair(self, t: np.ndarray) -> tuple[int, int, np.ndarray, float]:
-        # which friction: `evidence`'s T (t) of valve plate and other friction with the drift
-        # profiled out, each cause's change a line in time where the windows fit one for
-        # both (`ChangeStats.line_glr`), the better first, and their cosine so
+        # which friction: `evidence`'s T (t) of valve plate and other friction against a bias
+        # and the drift (`_friction_fits`), else the drift alone, each change a line in time
+        # where the windows fit one for both; the better first, and their cosine so
         stats = self.stats
         g, b, told = self.drift.profile(stats.g, stats.b)
-        lines = [stats.line_glr(i, self.drift.line_sums(i)) for i in (_VP, _OTHER)]
+        fits = self._friction_fits()
+        if fits is None:  # no bias fitted: against the drift alone
+            lines = [stats.line_glr(i, self.drift.line_sums(i)) for i in (_VP, _OTHER)]
+            fits = lines if None not in lines else [b[i] ** 2 / g[i, i] if told[i] else 0.0
+                                                    for i in (_VP, _OTHER)]
         t = t.copy()
         for i in (_VP, _OTHER):
-            line = lines[i] if None not in lines else None
-            fit = line if line is not None else b[i] ** 2 / g[i, i]
-            t[i] = fit / stats.lack_of_fit() if told[i] else 0.0
+            t[i] = fits[i] / stats.lack_of_fit() if told[i] else 0.0
         cos = float(g[_VP, _OTHER] / math.sqrt(g[_VP, _VP] * g[_OTHER, _OTHER])) \
             if told[_VP] and told[_OTHER] else 0.0
         return (_VP, _OTHER, t, cos) if t[_VP] >= t[_OTHER] else (_OTHER, _VP, t, cos)
+
+    def _friction_fits(self) -> list[float] | None:
+        # each friction's T against a bias from before the change and the drift
+        # (`FrictionBias`): a line in time where the windows fit one for both, else a step;
+        # None where the windows cannot tell a change from the bias for either
+        lines = (True, False) if self.stats.count - 2.0 >= 1.0 else (False,)
+        for line in lines:
+            fits = [self.bias.glr(i, line) for i in (_VP, _OTHER)]
+            if None not in fits:
+                return fits  # type: ignore[return-value]
+        return None
 
     def moving(self, j: int) -> tuple[float, float, float] | None:
         """
@@ -443,7 +457,7 @@ class FaultIsolation:
         return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
                 'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
                 'b1': st.b1.tolist(), 'bv': st.bv.tolist(), 'bv1': st.bv1.tolist(),
-                'drift': self.drift.state()}
+                'drift': self.drift.state(), 'bias': self.bias.state()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -468,11 +482,19 @@ class FaultIsolation:
         # the oil band's sums came later still (a file without them: no band until now)
         (bv, bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
             if 'bv' in state else ([np.zeros(_N)] * 2, [])
-        st = self.stats
-        st.g, st.b, st.c, st.count = g, b, c, count
-        st.g1, st.g2, st.b1 = g1, g2, b1
-        st.bv, st.bv1 = bv, bv1
-        st.windows = int(state['windows'])  # type: ignore[call-overload]
-        self.drift.reset()  # the drift's sums came later still (without: from the next window)
+        # the drift's and the bias's sums came later still (without: from the next window)
+        drift, bias = DriftNuisance(_N), FrictionBias()
         if 'drift' in state:
-            self.drift.load(state['drift'])  # type: ignore[arg-type]
+            drift.load(state['drift'])  # type: ignore[arg-type]
+            if 'x1' not in state['drift']:  # type: ignore[operator]
+                # without the drift's age-weighted sum the line's do not fit together (it
+                # named the wrong friction): the windows count as of one age, as its zeros
+                g1, g2, b1 = np.zeros(_N), np.zeros(_N), np.zeros(_N)
+        if 'bias' in state:
+            bias.load(state['bias'])  # type: ignore[arg-type]
+        bias.prior_precision = self.bias.prior_precision  # the monitor's, not the file's
+        windows = int(state['windows'])  # type: ignore[call-overload]
+        st = self.stats  # all read: replaced together
+        st.g, st.b, st.c, st.count, st.windows = g, b, c, count, windows
+        st.g1, st.g2, st.b1, st.bv, st.bv1 = g1, g2, b1, bv, bv1
+        self.drift, self.bias = drift, bias

@@ -400,6 +400,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                 self.alarm_onset_s = math.nan
             self.level = level
         self._undetectable = self._unseen(self._allowance_s)
+        self.isolation.bias.set_prior(self._undetectable)  # a bias it does not see (its bound)
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
 
@@ -439,6 +440,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                                                       @ self.learner.a)) / weight, 0.0))
         self._unseen_nm = self._k + self._sigmas * prediction_std
         self._undetectable = self._unseen(self._allowance_s)
+        self.isolation.bias.set_prior(self._undetectable)
 
     def _unseen(self, running_s: float) -> np.ndarray:
         """

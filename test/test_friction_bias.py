@@ -1,0 +1,172 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Which friction changed, told against a bias the baseline had before it: set truths."""
+
+import math
+
+import numpy as np
+from pump_friction_ros.core.attribution import AttributionSettings, FaultIsolation
+from pump_friction_ros.core.friction_bias import FrictionBias, Z95
+from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
+import pytest
+
+NOISE_NM = 0.01
+DURATION_S = 0.25
+VP, OTHER = 0, 1
+FRICTIONS = ('valve_plate', 'other_friction')
+UNDETECTABLE = np.full(6, 0.2)
+"""A change the CUSUMs do not see, as the bank's warm pumps have (x1.12-1.34 at 95 %)."""
+
+
+def _windows(seed, truth, bias, step=0.4, drift_per_k=0.0, windows=1200, onset=600):
+    """
+    Windows of an EHA cycle on warm oil whose baseline was learnt cold.
+
+    The speed (100-900 rad/s) and the load (0.5-6 N m) are independent; the two frictions'
+    signatures correlate about 0.97. Throughout, the healthy pump's friction reads ``bias``
+    (relative: valve plate, other friction) off the baseline, below what the CUSUMs see;
+    from window ``onset`` the friction ``truth`` is (1 + ``step``) times healthy. The torque
+    reads ``drift_per_k`` (T - T_0) of itself off, the oil 30-40 K above commissioning.
+    Yields (signatures, drift signature, change, changing).
+    """
+    rng = np.random.default_rng(seed)
+    for k in range(windows):
+        speed = rng.uniform(100.0, 900.0)
+        load = rng.uniform(0.5, 6.0)
+        s = np.array([0.01 + 4e-4 * speed, 0.06 + 2e-4 * speed, 0.0, -load, 1.0, 1.0])
+        s[2] = load + s[VP] + s[OTHER]
+        u = (30.0 + 10.0 * k / windows) * s[2]
+        changing = k >= onset
+        d = (bias[VP] * s[VP] + bias[OTHER] * s[OTHER] + (step * s[truth] if changing else 0.0)
+             + drift_per_k * u + rng.normal(0.0, NOISE_NM))
+        yield s, u, d, changing
+
+
+def _isolation(*args, prior=UNDETECTABLE, **kwargs):
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    if prior is not None:
+        isolation.bias.set_prior(prior)
+    for s, u, d, changing in _windows(*args, **kwargs):
+        isolation.add(s, d, NOISE_NM ** -2, DURATION_S, changing, u)
+    return isolation
+
+
+def _design(windows, prior):
+    """Return the weighted least-squares columns of every window, and the prior's rows."""
+    keep = math.exp(-DURATION_S / EstimatorConfig().isolation_memory_s)
+    onset = sum(not changing for *_, changing in windows)
+    ages = np.array([len(windows) - 1 - k if changing else onset - 1 - k
+                     for k, (*_, changing) in enumerate(windows)], dtype=float)
+    w = np.sqrt(NOISE_NM ** -2 * keep ** ages)
+    on = np.array([changing for *_, changing in windows], dtype=float)
+    s = np.array([s for s, *_ in windows])
+    nuisance = np.column_stack([s[:, VP], s[:, OTHER], [u for _, u, _, _ in windows]]) * w[:, None]
+    d = np.array([d for _, _, d, _ in windows]) * w
+    # the prior beta_j ~ N(0, (bound / 1.96)^2): one pseudo-observation 0 = beta_j / std_j each
+    rows = np.zeros((2, 3))
+    rows[[0, 1], [0, 1]] = Z95 / np.asarray(prior[:2])
+    return s, on, ages * DURATION_S, w, nuisance, d, rows
+
+
+@pytest.mark.parametrize('line', [False, True])
+@pytest.mark.parametrize('drift_per_k', [0.0, 0.4e-3])
+def test_the_glr_is_the_weighted_least_squares_against_the_bias_and_the_drift(line, drift_per_k):
+    # T_j = RSS(bias and drift) - RSS(the change of j, and the bias and drift), over every
+    # window weighted by the memory, the prior as two pseudo-observations
+    windows = list(_windows(3, VP, (0.05, 0.1), drift_per_k=drift_per_k))
+    isolation = _isolation(3, VP, (0.05, 0.1), drift_per_k=drift_per_k)
+    s, on, tau, w, nuisance, d, rows = _design(windows, UNDETECTABLE)
+
+    def rss(columns):
+        a = np.vstack([columns, np.column_stack([np.zeros((2, columns.shape[1] - 3)), rows])])
+        y = np.append(d, [0.0, 0.0])
+        return float(np.sum((y - a @ np.linalg.lstsq(a, y, rcond=None)[0]) ** 2))
+
+    for j in (VP, OTHER):
+        step = s[:, j] * on * w
+        change = [step, tau * step] if line else [step]
+        t = rss(nuisance) - rss(np.column_stack([*change, nuisance]))
+        assert isolation.bias.glr(j, line) == pytest.approx(t, rel=1e-6)
+
+
+@pytest.mark.parametrize('seed', range(6))
+@pytest.mark.parametrize('bias', [0.12, 0.2])
+def test_a_step_on_a_baseline_already_off_is_named_for_the_step_not_the_bias(seed, bias):
+    # the healthy pump reads the valve plate 12-20 % high (a cold baseline, a warm pump),
+    # within what the CUSUMs do not see: an other friction x1.4 on top of it is the other
+    # friction, where the step per cause against the drift alone names the valve plate
+    isolation = _isolation(seed, OTHER, (bias, 0.0), drift_per_k=0.3e-3)
+    assert isolation.verdict()[0] == 'other_friction'
+    st = isolation.stats
+    g, b, _ = isolation.drift.profile(st.g, st.b)
+    steps = b * b / np.diag(g)
+    assert steps[VP] - steps[OTHER] > 100.0
+
+
+@pytest.mark.parametrize('seed', range(6))
+@pytest.mark.parametrize('bias', [0.12, 0.2])
+def test_a_valve_plate_step_on_a_baseline_off_in_the_other_friction_stays_the_valve_plate(
+        seed, bias):
+    assert _isolation(seed, VP, (0.0, bias), drift_per_k=0.3e-3).verdict()[0] == 'valve_plate'
+
+
+@pytest.mark.parametrize('seed', range(4))
+@pytest.mark.parametrize('truth', [VP, OTHER])
+def test_without_a_bias_steps_of_either_friction_are_named_right(seed, truth):
+    isolation = _isolation(20 + seed, truth, (0.0, 0.0), drift_per_k=-0.3e-3)
+    assert isolation.verdict()[0] == FRICTIONS[truth]
+
+
+def test_the_prior_is_the_undetectable_change_at_95_percent_and_none_where_it_is_not_known():
+    bias = FrictionBias()
+    bias.set_prior(np.array([0.2, 0.4, 0.1, 0.1, 0.1, 0.1]))
+    assert bias.prior_precision == pytest.approx([(Z95 / 0.2) ** 2, (Z95 / 0.4) ** 2, 0.0])
+    bias.set_prior(np.array([0.0, math.nan, 0.1, 0.1, 0.1, 0.1]))
+    assert np.all(bias.prior_precision == 0.0)
+
+
+def test_with_nothing_before_the_change_and_no_prior_the_choice_is_against_the_drift_alone():
+    # the bias cannot be told from the change: none is fitted, the line per cause decides
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    for s, u, d, _ in _windows(5, VP, (0.0, 0.0), onset=0):
+        isolation.add(s, d, NOISE_NM ** -2, DURATION_S, True, u)
+    assert isolation.bias.glr(VP, True) is None and isolation.bias.glr(VP, False) is None
+    st = isolation.stats
+    lines = [st.line_glr(i, isolation.drift.line_sums(i)) / st.lack_of_fit() for i in (0, 1)]
+    j, k, t, _ = isolation._friction_pair(isolation.evidence()[0])
+    assert (t[VP], t[OTHER]) == pytest.approx(lines, rel=1e-12)
+    assert (j, k) == (VP, OTHER)
+
+
+def test_the_sums_survive_a_restart_and_an_older_state_loads_without_them():
+    isolation = _isolation(6, VP, (0.0, 0.1))
+    again = _isolation(7, OTHER, (0.0, 0.0))
+    again.load(isolation.state())
+    assert again.bias.glr(VP, True) == isolation.bias.glr(VP, True)
+    older = {key: value for key, value in isolation.state().items() if key != 'bias'}
+    again.load(older)  # written before the bias: its sums from the next window on
+    assert again.bias.state() == FrictionBias().state()
+
+
+@pytest.mark.parametrize('bad', [{'g0': [[0.0] * 3] * 2}, {'b1': [math.nan] * 3},
+                                 {'g_before': None}, {'b0': 'warm'}])
+def test_malformed_bias_sums_are_refused(bad):
+    state = _isolation(8, VP, (0.0, 0.1)).state()
+    state['bias'] = {**state['bias'], **bad}
+    with pytest.raises(ValueError):
+        _isolation(9, VP, (0.0, 0.0)).load(state)
+    missing = {key: value for key, value in state['bias'].items() if key != 'b_before'}
+    with pytest.raises(ValueError):
+        FrictionBias().load(missing)
