@@ -156,8 +156,31 @@ def test_the_sums_survive_a_restart_and_an_older_state_loads_without_them():
     again.load(isolation.state())
     assert again.bias.glr(VP, True) == isolation.bias.glr(VP, True)
     older = {key: value for key, value in isolation.state().items() if key != 'bias'}
-    again.load(older)  # written before the bias: its sums from the next window on
-    assert again.bias.state() == FrictionBias().state()
+    again.load(older)  # written before the bias, in a change: none fitted while it lasts
+    assert again.bias.glr(VP, True) is None and again.bias.glr(VP, False) is None
+    fresh = _isolation(7, OTHER, (0.0, 0.0), windows=300)  # (no change under way)
+    fresh.load({key: value for key, value in fresh.state().items() if key != 'bias'})
+    assert fresh.bias.state() == FrictionBias().state()
+
+
+@pytest.mark.parametrize('seed', range(4))
+def test_a_change_under_way_in_a_state_written_before_the_bias_keeps_its_name(seed):
+    # the bias's sums would begin inside the change, which they would take for the bias:
+    # until the change ends the choice is against the drift alone, as when it was saved
+    windows = list(_windows(seed, OTHER, (0.0, 0.0), drift_per_k=0.3e-3))
+    isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    for s, u, d, changing in windows[:1000]:
+        isolation.add(s, d, NOISE_NM ** -2, DURATION_S, changing, u)
+    state = {key: value for key, value in isolation.state().items() if key != 'bias'}
+    again = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
+    again.bias.set_prior(UNDETECTABLE)
+    again.load(state)
+    for s, u, d, changing in windows[1000:]:
+        again.add(s, d, NOISE_NM ** -2, DURATION_S, changing, u)
+        assert again.verdict()[0] == 'other_friction'
+    s, u, *_ = windows[0]
+    again.add(s, 0.0, NOISE_NM ** -2, DURATION_S, False, u)
+    assert again.bias.usable  # the change ended: the next one is seen from its start
 
 
 @pytest.mark.parametrize('bad', [{'g0': [[0.0] * 3] * 2}, {'b1': [math.nan] * 3},

@@ -331,8 +331,8 @@ def _worker(conn: Any, job: ReplayJob) -> None:
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         conn.send(run_job(job))
-    except KeyboardInterrupt:  # that check: exit as the SIGTERM would have
-        raise SystemExit(128 + signal.SIGTERM)  # (its context: the check, never shown)
+    except KeyboardInterrupt as exc:  # that check: exit as the SIGTERM would have
+        raise SystemExit(128 + signal.SIGTERM) from exc
     except OSError:
         pass  # the parent is gone
     finally:

@@ -284,8 +284,7 @@ class FaultIsolation:
         # each friction's T against a bias from before the change and the drift
         # (`FrictionBias`): a line in time where the windows fit one for both, else a step;
         # None where the windows cannot tell a change from the bias for either
-        lines = (True, False) if self.stats.count - 2.0 >= 1.0 else (False,)
-        for line in lines:
+        for line in (True, False) if self.stats.count - 2.0 >= 1.0 else (False,):
             fits = [self.bias.glr(i, line) for i in (_VP, _OTHER)]
             if None not in fits:
                 return fits  # type: ignore[return-value]
@@ -476,24 +475,25 @@ class FaultIsolation:
         """
         (g, b), (c, count) = read_sums(state, {'g': (_N, _N), 'b': (_N,)}, ('c', 'count'),
                                        'isolation')
-        # the age-weighted sums came later (a file without them: from the next window on)
+        # sums that came later: a file without them, from the next window on (the oil
+        # band's: no band until now; the bias's: none while a change under way lasts)
         (g1, g2, b1), _ = read_sums(state, {'g1': (_N,), 'g2': (_N,), 'b1': (_N,)}, (),
                                     'isolation') if 'g1' in state else ([np.zeros(_N)] * 3, [])
-        # the oil band's sums came later still (a file without them: no band until now)
         (bv, bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
             if 'bv' in state else ([np.zeros(_N)] * 2, [])
-        # the drift's and the bias's sums came later still (without: from the next window)
+        windows = int(state['windows'])  # type: ignore[call-overload]
         drift, bias = DriftNuisance(_N), FrictionBias()
         if 'drift' in state:
             drift.load(state['drift'])  # type: ignore[arg-type]
             if 'x1' not in state['drift']:  # type: ignore[operator]
                 # without the drift's age-weighted sum the line's do not fit together (it
                 # named the wrong friction): the windows count as of one age, as its zeros
-                g1, g2, b1 = np.zeros(_N), np.zeros(_N), np.zeros(_N)
+                g1, g2, b1, bv1 = np.zeros(_N), np.zeros(_N), np.zeros(_N), np.zeros(_N)
         if 'bias' in state:
             bias.load(state['bias'])  # type: ignore[arg-type]
-        bias.prior_precision = self.bias.prior_precision  # the monitor's, not the file's
-        windows = int(state['windows'])  # type: ignore[call-overload]
+        else:
+            bias.usable = not windows
+        bias.prior_precision = self.bias.prior_precision  # the monitor's
         st = self.stats  # all read: replaced together
         st.g, st.b, st.c, st.count, st.windows = g, b, c, count, windows
         st.g1, st.g2, st.b1, st.bv, st.bv1 = g1, g2, b1, bv, bv1

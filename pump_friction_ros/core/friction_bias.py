@@ -37,8 +37,11 @@ s_j with U over the change's. The same holds for a change along a line in time (
 tau s_j, `ChangeStats.line_glr`). The bias is bounded as the detection bounds it: a bias
 above the change the CUSUMs do not see (``WearMonitor.undetectable_change``) would have
 raised an alarm before, so beta_j has a normal prior of that size at 95 % (`set_prior`), which
-also pins it where few windows came before the change. The windows before the change stop
-ageing while it lasts, as the drift's do.
+also pins it where few windows came before the change; it weighs against the windows in
+the baseline's noise units, those of that bound (not rescaled by the lack of fit that the
+isolation's T is divided by). The windows before the change stop ageing while it lasts, as
+the drift's do. A state written before these sums, loaded during a change, fits no bias
+until that change ends (its sums would begin inside the change and take it for the bias).
 
 Only which friction changed is told so: the size of the change and its interval stay the
 single cause's, relative to the baseline (``attribution``).
@@ -69,6 +72,7 @@ class FrictionBias:
 
     def reset(self) -> None:
         """Forget every window."""
+        self.usable = True  # False: a change under way whose start these sums did not see
         self.g_before = np.zeros((_K, _K))  # sum w U U^T over the windows before the change
         self.b_before = np.zeros(_K)  # sum w U d over them
         self.g0 = np.zeros((_K, _K))  # the same over the change's windows
@@ -118,6 +122,7 @@ class FrictionBias:
         """
         if not (math.isfinite(u_nm) and math.isfinite(d_nm * weight)):
             u_nm = 0.0
+        self.usable = self.usable or not changing  # the next change is seen from its start
         x = np.array([s[0], s[1], u_nm])
         outer = weight * np.outer(x, x)
         if changing:  # the windows before it do not age while it lasts
@@ -149,9 +154,12 @@ class FrictionBias:
         float or None
             T_j [-] (noise units); None where the windows cannot tell the change from the
             bias (no signature of j, or none that the windows before and the prior do not
-            take whole).
+            take whole), or the sums began after the change did (a state written before
+            them, `load`: until the change ends).
 
         """
+        if not self.usable:
+            return None
         keep = np.flatnonzero(np.diag(self.g_before + self.g0) > 0.0)
         if j not in keep:
             return None
@@ -178,7 +186,7 @@ class FrictionBias:
         """Return the sums as plain values (the prior is the monitor's, set anew)."""
         return {'g_before': self.g_before.tolist(), 'b_before': self.b_before.tolist(),
                 'g0': self.g0.tolist(), 'g1': self.g1.tolist(), 'g2': self.g2.tolist(),
-                'b0': self.b0.tolist(), 'b1': self.b1.tolist()}
+                'b0': self.b0.tolist(), 'b1': self.b1.tolist(), 'usable': self.usable}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -203,3 +211,4 @@ class FrictionBias:
         except (KeyError, TypeError) as exc:
             raise ValueError(f'friction bias sums: {exc!r}') from None
         (self.g_before, self.b_before, self.g0, self.g1, self.g2, self.b0, self.b1) = sums
+        self.usable = state.get('usable', True) is not False
