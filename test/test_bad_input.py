@@ -503,7 +503,6 @@ CTRL_C_IN_A_FINALISER = SIGNAL_IN_A_FINALISER.format(signal='SIGINT')
 SIGTERM_IN_A_FINALISER = SIGNAL_IN_A_FINALISER.format(signal='SIGTERM')
 
 
-
 def test_a_ctrl_c_that_lands_in_a_finaliser_still_interrupts_and_leaves_nothing(
         env, tmp_path, long_bag):
     # CI, f314839: the Ctrl-C landed in a multiprocessing Connection's __del__, where Python

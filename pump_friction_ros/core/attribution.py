@@ -269,10 +269,11 @@ class FaultIsolation:
         stats = self.stats
         g, b, told = self.drift.profile(stats.g, stats.b)
         fits = self._friction_fits()
-        if fits is None:  # no bias fitted: against the drift alone
+        if fits is None:  # no bias fitted: against the drift alone, a line for both or a step
             lines = [stats.line_glr(i, self.drift.line_sums(i)) for i in (_VP, _OTHER)]
-            fits = lines if None not in lines else [b[i] ** 2 / g[i, i] if told[i] else 0.0
-                                                    for i in (_VP, _OTHER)]
+            fits = [x for x in lines if x is not None]
+            if len(fits) < 2:
+                fits = [float(b[i] ** 2 / g[i, i]) if told[i] else 0.0 for i in (_VP, _OTHER)]
         t = t.copy()
         for i in (_VP, _OTHER):
             t[i] = fits[i] / stats.lack_of_fit() if told[i] else 0.0
@@ -281,13 +282,12 @@ class FaultIsolation:
         return (_VP, _OTHER, t, cos) if t[_VP] >= t[_OTHER] else (_OTHER, _VP, t, cos)
 
     def _friction_fits(self) -> list[float] | None:
-        # each friction's T against a bias from before the change and the drift
-        # (`FrictionBias`): a line in time where the windows fit one for both, else a step;
-        # None where the windows cannot tell a change from the bias for either
+        # each friction's T against a bias from before the change and the drift (a line in
+        # time where the windows fit one for both, else a step); None: not for both
         for line in (True, False) if self.stats.count - 2.0 >= 1.0 else (False,):
-            fits = [self.bias.glr(i, line) for i in (_VP, _OTHER)]
-            if None not in fits:
-                return fits  # type: ignore[return-value]
+            fits = [x for x in (self.bias.glr(i, line) for i in (_VP, _OTHER)) if x is not None]
+            if len(fits) == 2:
+                return fits
         return None
 
     def moving(self, j: int) -> tuple[float, float, float] | None:
