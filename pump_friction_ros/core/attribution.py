@@ -69,7 +69,7 @@ import numpy as np
 from .baseline import Baseline, read_sums
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
-from .friction_bias import FrictionBias
+from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -78,9 +78,6 @@ CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torq
 """The single-cause explanations of a change, in signature order."""
 _VP, _OTHER = 0, 1
 _N = len(CAUSES)
-Z95 = 1.959963984540054
-"""Half-width of a 95 % normal interval in standard deviations: a reported scale's std is
-its interval's half-width over this."""
 MIN_LEVEL = 0.2
 """The uncertainty of a reported scale divides by the learnt friction level; a level below
 this times the model's is taken at it (a guard of the division, not a figure of the pump)."""

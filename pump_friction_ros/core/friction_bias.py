@@ -60,7 +60,8 @@ __all__ = ['FrictionBias']
 _K = 3
 """The nuisance's terms: valve-plate bias, other-friction bias, torque-constant drift."""
 Z95 = 1.959963984540054
-"""A prior's 95 % bound in its standard deviations."""
+"""Half-width of a 95 % normal interval in standard deviations (a prior's bound, a reported
+scale's interval: ``attribution``)."""
 
 
 class FrictionBias:
