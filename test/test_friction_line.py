@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 from pump_friction_ros.core.attribution import AttributionSettings, FaultIsolation
+from pump_friction_ros.core.friction_choice import choose_friction
 from pump_friction_ros.core.node_parameters import EstimatorConfig, settings_view
 import pytest
 
@@ -127,16 +128,21 @@ def test_steps_and_ramps_of_either_friction_are_named_right(seed, truth, ramp):
 
 def test_with_one_age_for_every_window_the_choice_is_a_step_per_cause():
     # no running between the windows: no line can be fitted, and both causes fall back to
-    # a step against the bias and the drift (`friction_bias`), neither fitted with more
+    # a step, against the drift alone and against the bias and the drift (`friction_bias`),
+    # neither fitted with more; the evidence is the fit with the smaller lead
     isolation = FaultIsolation(settings_view(EstimatorConfig(), AttributionSettings), False)
     for s, u, d, changing in _windows(4, VP, False, 0.3e-3):
         isolation.add(s, d, NOISE_NM ** -2, 0.0, changing, u)
     st = isolation.stats
     assert st.line_glr(VP, isolation.drift.line_sums(VP)) is None
-    steps = [isolation.bias.glr(i, False) / st.lack_of_fit() for i in (VP, OTHER)]
-    j, k, t, _ = isolation._friction_pair(isolation.evidence()[0])
-    assert (j, k) == (VP, OTHER)
-    assert (t[VP], t[OTHER]) == pytest.approx(steps, rel=1e-12)
+    with_bias = [isolation.bias.glr(i, False) / st.lack_of_fit() for i in (VP, OTHER)]
+    g, b, _ = isolation.drift.profile(st.g, st.b)
+    without = [b[i] ** 2 / g[i, i] / st.lack_of_fit() for i in (VP, OTHER)]
+    assert min(with_bias[VP] - with_bias[OTHER], without[VP] - without[OTHER]) > 9.0
+    lead = min(with_bias, without, key=lambda x: x[VP] - x[OTHER])
+    choice = choose_friction(st, isolation.drift, isolation.bias, isolation.evidence()[0])
+    assert (choice.first, choice.second, choice.split) == (VP, OTHER, None)
+    assert (choice.t[VP], choice.t[OTHER]) == pytest.approx(lead, rel=1e-12)
 
 
 @pytest.mark.parametrize('seed', range(6))

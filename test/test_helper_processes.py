@@ -279,6 +279,34 @@ def test_a_sigterm_during_a_held_moment_is_delivered_after_it():
     assert run_bounded(sigterm_while_held) == ['still held', 'terminated', 'released']
 
 
+def report_mask(conn):
+    conn.send(sorted(signal.pthread_sigmask(signal.SIG_BLOCK, [])))
+
+
+def start_under_the_hold_with_another_default(method, conn):
+    from pump_friction_ros.staging import sigint_held
+    multiprocessing.set_start_method(method, force=True)
+    ctx = sources.process_context()
+    mine, theirs = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=report_mask, args=(theirs,))
+    with sigint_held():
+        proc.start()
+    theirs.close()
+    mask = mine.recv() if mine.poll(BOUND_S) else None
+    proc.join(BOUND_S)
+    conn.send((ctx.get_start_method(), mask))
+
+
+@pytest.mark.parametrize('method', ['forkserver', 'spawn'])
+def test_helpers_start_with_ctrl_c_held_whatever_the_default_start_method(method):
+    # Python 3.14 starts processes from a forkserver by default on Linux: its children do
+    # not inherit the parent thread's blocked signals, and a Ctrl-C before the helper's own
+    # handler would raise in it. The helpers fork, and a child starts with both held
+    started, mask = run_bounded(start_under_the_hold_with_another_default, method)
+    assert started == 'fork'
+    assert {signal.SIGINT, signal.SIGTERM} <= set(mask)
+
+
 def test_fleet_workers_ignore_ctrl_c_and_results_keep_job_order(tmp_path, bags):
     jobs = [ReplayJob(bag=str(b), config=CONFIG) for b in bags * 2]
     summaries = run_jobs(jobs, workers=3)

@@ -235,8 +235,56 @@ def bench_replay() -> None:
          f'{base / full:.2f}x')
 
 
+def bench_isolation() -> None:
+    """Fault isolation: cost of one attribution window, before a change and during one."""
+    from ..core.attribution import AttributionSettings, FaultIsolation
+    from ..core.change_stats import ChangeStats
+    from ..core.node_parameters import EstimatorConfig, settings_view
+
+    config = EstimatorConfig()
+    duration_s = config.attribution_window_s
+    n = 2000  # windows: 500 s of monitored running, a change in the second half
+    rng = np.random.default_rng(1)
+    speed, load = rng.uniform(100.0, 900.0, n), rng.uniform(0.5, 6.0, n)
+    sig = np.column_stack([0.01 + 4e-4 * speed, 0.06 + 2e-4 * speed, load, -load,
+                           np.ones(n), np.ones(n)])
+    d = 0.4 * sig[:, 0] * (np.arange(n) >= n // 2) + rng.normal(0.0, 0.01, n)
+    windows = [(sig[k], float(d[k]), float(30.0 * sig[k, 2]), k >= n // 2) for k in range(n)]
+    undetectable = np.full(6, 0.2)
+    keep = float(np.exp(-duration_s / config.isolation_memory_s))
+    print(f'isolation: {n} attribution windows of {duration_s} s, a valve-plate change from '
+          'the middle on')
+    print('  baseline: the single-cause GLR sums alone (ChangeStats.add and .glr) per window')
+
+    def run() -> FaultIsolation:
+        isolation = FaultIsolation(settings_view(config, AttributionSettings), False)
+        for s, d_nm, u_nm, on in windows:
+            isolation.add(s, d_nm, 1e4, duration_s, on, u_nm)
+            isolation.bias.set_prior(undetectable)
+        return isolation
+
+    def run_sums() -> None:
+        stats = ChangeStats(6)
+        for s, d_nm, _, on in windows:
+            stats.add(s, d_nm, 1e4, keep, duration_s, 0.0)
+            stats.glr()
+
+    isolation = run()
+    add = best_time_s(run, repeat=5) / n
+    verdict = best_time_s(isolation.verdict, repeat=5, number=200)
+    sums = best_time_s(run_sums, repeat=5) / n
+    _row('', 'isolation', 'GLR sums', 'ratio')
+    _row('the sums of one window (every window)', f'{add * 1e6:.1f} us', f'{sums * 1e6:.1f} us',
+         f'{add / sums:.1f}x')
+    _row('its verdict in a change (bias, drift, choice)', f'{verdict * 1e6:.1f} us',
+         f'{sums * 1e6:.1f} us', f'{verdict / sums:.1f}x')
+    print(f'  -> {(add + verdict) / duration_s * 100:.3f} % of one core at one window per '
+          f'{duration_s} s of running')
+
+
 SECTIONS: dict[str, Callable[[], None]] = {'model': bench_model, 'table': bench_table,
                                            'estimator': bench_estimator,
+                                           'isolation': bench_isolation,
                                            'replay': bench_replay}
 
 

@@ -44,7 +44,7 @@ import signal
 from typing import Any, cast
 
 from .replay import replay_bag, ReplaySummary
-from .sources import stop_process
+from .sources import process_context, stop_process
 from ..core.baseline_store import BaselineStore
 from ..core.estimator import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
@@ -341,7 +341,7 @@ def _worker(conn: Any, job: ReplayJob) -> None:
 
 def _run_local(jobs: list[ReplayJob], workers: int) -> list[ReplaySummary]:
     """Run the jobs in worker processes, ``workers`` at a time; summaries in job order."""
-    ctx = multiprocessing.get_context()
+    ctx = process_context()
     results: list[ReplaySummary | None] = [None] * len(jobs)
     running: dict[Any, tuple[int, Any]] = {}  # result pipe -> (job index, process)
     queued = iter(enumerate(jobs))

@@ -23,11 +23,10 @@ node's: reliable, keep last, volatile) and the compression chosen by `output_com
 
 from __future__ import annotations
 
-import multiprocessing
 from typing import Any, Protocol
 
 from .reader import BagMeta
-from .sources import child_signals, start_helper, stop_process
+from .sources import child_signals, process_context, start_helper, stop_process
 from ..core.node_parameters import NODE_NAME
 from ..errors import BagError
 from ..messages.conversions import (
@@ -232,7 +231,7 @@ class ProcessSink:
     """Writes the output bag in a helper process, in batches, while the core runs."""
 
     def __init__(self, path: str, storage: str, compression: str = '') -> None:
-        ctx = multiprocessing.get_context()
+        ctx = process_context()
         self._conn, child = ctx.Pipe(duplex=True)
         self._proc = ctx.Process(target=_writer_process,
                                  args=(child, self._conn, path, storage, compression),

@@ -27,15 +27,19 @@ from collections.abc import Callable, Iterator
 import multiprocessing
 from pathlib import Path
 import signal
-from typing import Any, Protocol
+import sys
+from typing import Any, Protocol, TYPE_CHECKING
 
 from .reader import BagInputs, BagMeta, Chunk, ReadStats
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError
 from ..staging import sigint_held
 
+if TYPE_CHECKING:  # (no ForkContext on Windows)
+    from multiprocessing.context import DefaultContext, ForkContext
+
 __all__ = ['InlineSource', 'ProcessSource', 'Source', 'child_signals', 'open_source',
-           'sigint_held', 'start_helper', 'stop_process']
+           'process_context', 'sigint_held', 'start_helper', 'stop_process']
 
 JOIN_TIMEOUT_S = 5.0
 """How long a helper process is given to end by itself before it is killed [s]."""
@@ -75,6 +79,27 @@ class InlineSource:
     def close(self) -> None:
         """Close the bag."""
         self._inputs.close()
+
+
+def process_context() -> ForkContext | DefaultContext:
+    """
+    Return how helper and fleet processes start: forked, where the platform has fork.
+
+    They are started under `staging.sigint_held` and rely on a forked child inheriting the
+    blocked signals until it sets its own handlers (`child_signals`). Forkserver (Python
+    3.14's default on Linux) and spawn start the child from another process, whose mask is
+    not this thread's: a Ctrl-C in that instant would raise in the child. Elsewhere (macOS,
+    Windows: no safe fork) the platform's default.
+
+    Returns
+    -------
+    multiprocessing.context.ForkContext or DefaultContext
+        The context to make pipes and processes with.
+
+    """
+    if sys.platform == 'linux' and 'fork' in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context('fork')
+    return multiprocessing.get_context()
 
 
 def child_signals() -> None:
@@ -166,7 +191,7 @@ class ProcessSource:
 
     def __init__(self, bag: str | Path, config: EstimatorConfig,
                  remaps: dict[str, str] | None) -> None:
-        ctx = multiprocessing.get_context()
+        ctx = process_context()
         self._conn, child = ctx.Pipe(duplex=False)
         self._proc = ctx.Process(target=_reader_process,
                                  args=(child, self._conn, str(bag), config, remaps),

@@ -52,8 +52,9 @@ deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
 A friction cause's change is fitted together with a torque-constant drift too small to have
 been learnt (``drift_nuisance``), where the temperature topic makes one possible. Which
 friction changed (their signatures correlate 0.97-0.99 on a load-driven cycle) is told
-with each one's change a line in time, against the drift and a friction bias the baseline
-had before the change (``friction_bias``). The reported scales (`FaultIsolation.scales`)
+with each one's change a line in time, against the drift alone and against the drift and a
+friction bias the baseline had before the change (``friction_bias``), and named only where
+both fits name it (``friction_choice``). The reported scales (`FaultIsolation.scales`)
 span what the data do not rule out: a change still moving (a line through it over the
 memory, `FaultIsolation.moving`) up to its present value, and, until one cause is
 confirmed, no change as well as the change that the detection does not see.
@@ -70,6 +71,7 @@ from .baseline import Baseline, read_sums
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
+from .friction_choice import choose_friction
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -259,34 +261,6 @@ class FaultIsolation:
         delta, var = self.drift.change(j, stats.g, stats.b)
         return delta, math.sqrt(stats.lack_of_fit() * var)
 
-    def _friction_pair(self, t: np.ndarray) -> tuple[int, int, np.ndarray, float]:
-        # which friction: `evidence`'s T (t) of valve plate and other friction against a bias
-        # and the drift (`_friction_fits`), else the drift alone, each change a line in time
-        # where the windows fit one for both; the better first, and their cosine so
-        stats = self.stats
-        g, b, told = self.drift.profile(stats.g, stats.b)
-        fits = self._friction_fits()
-        if fits is None:  # no bias fitted: against the drift alone, a line for both or a step
-            lines = [stats.line_glr(i, self.drift.line_sums(i)) for i in (_VP, _OTHER)]
-            fits = [x for x in lines if x is not None]
-            if len(fits) < 2:
-                fits = [float(b[i] ** 2 / g[i, i]) if told[i] else 0.0 for i in (_VP, _OTHER)]
-        t = t.copy()
-        for i in (_VP, _OTHER):
-            t[i] = fits[i] / stats.lack_of_fit() if told[i] else 0.0
-        cos = float(g[_VP, _OTHER] / math.sqrt(g[_VP, _VP] * g[_OTHER, _OTHER])) \
-            if told[_VP] and told[_OTHER] else 0.0
-        return (_VP, _OTHER, t, cos) if t[_VP] >= t[_OTHER] else (_OTHER, _VP, t, cos)
-
-    def _friction_fits(self) -> list[float] | None:
-        # each friction's T against a bias from before the change and the drift (a line in
-        # time where the windows fit one for both, else a step); None: not for both
-        for line in (True, False) if self.stats.count - 2.0 >= 1.0 else (False,):
-            fits = [x for x in (self.bias.glr(i, line) for i in (_VP, _OTHER)) if x is not None]
-            if len(fits) == 2:
-                return fits
-        return None
-
     def moving(self, j: int) -> tuple[float, float, float] | None:
         """
         Return cause j's change as it is now where it still moves, else None.
@@ -335,7 +309,14 @@ class FaultIsolation:
         if j in (_VP, _OTHER) and (not close or k in (_VP, _OTHER)):
             # friction: which one is told with a k_t drift too small to be learnt profiled
             # out, as its size is (the same as above where the drift carries nothing)
-            j, k, t, cos = self._friction_pair(t)
+            choice = choose_friction(stats, self.drift, self.bias, t)
+            j, k, t, cos = choice.first, choice.second, choice.t, choice.cos
+            if choice.split is not None:
+                return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[_VP]]} or '
+                        f'{_WORDS[CAUSES[_OTHER]]}: the choice turns on whether the baseline '
+                        'was already off before the change (evidence {:.0f} against {:.0f} '
+                        'with that bias fitted, {:.0f} against {:.0f} without)'.format(
+                            *choice.split), -1)
             close = not t[j] - t[k] >= z2
             tied = close and abs(cos) >= self.settings.identifiability_correlation
         if tied:

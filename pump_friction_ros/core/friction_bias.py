@@ -74,6 +74,7 @@ class FrictionBias:
     def reset(self) -> None:
         """Forget every window."""
         self.usable = True  # False: a change under way whose start these sums did not see
+        self._open = False  # the change's sums hold windows
         self.g_before = np.zeros((_K, _K))  # sum w U U^T over the windows before the change
         self.b_before = np.zeros(_K)  # sum w U d over them
         self.g0 = np.zeros((_K, _K))  # the same over the change's windows
@@ -127,6 +128,7 @@ class FrictionBias:
         x = np.array([s[0], s[1], u_nm])
         outer = weight * np.outer(x, x)
         if changing:  # the windows before it do not age while it lasts
+            self._open = True
             a = duration_s
             self.g2 = keep * (self.g2 + 2.0 * a * self.g1 + a * a * self.g0)
             self.g1 = keep * (self.g1 + a * self.g0)
@@ -134,10 +136,14 @@ class FrictionBias:
             self.g0 = keep * self.g0 + outer
             self.b0 = keep * self.b0 + weight * d_nm * x
             return
-        self.g_before = keep * (self.g_before + self.g0) + outer
-        self.b_before = keep * (self.b_before + self.b0) + weight * d_nm * x
-        self.g0, self.g1, self.g2 = (np.zeros((_K, _K)) for _ in range(3))
-        self.b0, self.b1 = np.zeros(_K), np.zeros(_K)
+        if self._open:  # the change's windows join those before the next one
+            self.g_before += self.g0
+            self.b_before += self.b0
+            self.g0, self.g1, self.g2 = (np.zeros((_K, _K)) for _ in range(3))
+            self.b0, self.b1 = np.zeros(_K), np.zeros(_K)
+            self._open = False
+        self.g_before = keep * self.g_before + outer
+        self.b_before = keep * self.b_before + weight * d_nm * x
 
     def glr(self, j: int, line: bool) -> float | None:
         """
@@ -159,29 +165,52 @@ class FrictionBias:
             them, `load`: until the change ends).
 
         """
+        return self.glr_pair(line)[j]
+
+    def glr_pair(self, line: bool) -> tuple[float | None, float | None]:
+        """
+        Return both frictions' GLRs against the bias and the drift, with one solve.
+
+        Parameters
+        ----------
+        line : bool
+            Each change a line in time (level and slope) rather than a step.
+
+        Returns
+        -------
+        tuple of float or None
+            (T_vp, T_o) [-], each as `glr`.
+
+        """
         if not self.usable:
-            return None
+            return None, None
         keep = np.flatnonzero(np.diag(self.g_before + self.g0) > 0.0)
-        if j not in keep:
-            return None
+        frictions = [j for j in (0, 1) if j in keep]
+        if not frictions:
+            return None, None
         g_u = (self.g_before + self.g0 + np.diag(self.prior_precision))[np.ix_(keep, keep)]
-        b_u = (self.b_before + self.b0)[keep]
-        rows = [self.g0[j, keep], self.g1[j, keep]]
-        g_a = np.array([[self.g0[j, j], self.g1[j, j]], [self.g1[j, j], self.g2[j, j]]])
-        r_a = np.array([self.b0[j], self.b1[j]])
         n = 2 if line else 1
-        x = np.array(rows[:n])
+        x = np.vstack([(self.g0[j, keep], self.g1[j, keep])[:n] for j in frictions])
         try:
-            solved = np.linalg.solve(g_u, np.column_stack([x.T, b_u]))
+            solved = np.linalg.solve(g_u, np.column_stack([x.T, (self.b_before + self.b0)[keep]]))
         except np.linalg.LinAlgError:
-            return None
-        g_p = g_a[:n, :n] - x @ solved[:, :n]
-        r_p = r_a[:n] - x @ solved[:, n]
-        scale = np.diag(g_a[:n, :n])
-        if not (np.all(np.diag(g_p) > 1e-9 * scale) and
-                (n == 1 or np.linalg.det(g_p) > 1e-9 * float(np.prod(np.diag(g_p))))):
-            return None
-        return float(r_p @ np.linalg.solve(g_p, r_p))
+            return None, None
+        out: list[float | None] = [None, None]
+        for m, j in enumerate(frictions):
+            x_j, s_j = x[m * n:(m + 1) * n], solved[:, m * n:(m + 1) * n]
+            g_a = np.array([[self.g0[j, j], self.g1[j, j]], [self.g1[j, j], self.g2[j, j]]])
+            g_p = g_a[:n, :n] - x_j @ s_j
+            r_p = np.array([self.b0[j], self.b1[j]])[:n] - x_j @ solved[:, -1]
+            if not np.all(np.diag(g_p) > 1e-9 * np.diag(g_a)[:n]):
+                continue
+            if n == 1:
+                out[j] = float(r_p[0] * r_p[0] / g_p[0, 0])
+                continue
+            det = g_p[0, 0] * g_p[1, 1] - g_p[0, 1] * g_p[1, 0]
+            if det > 1e-9 * g_p[0, 0] * g_p[1, 1]:  # r^T G^-1 r, G 2x2 symmetric
+                out[j] = float((g_p[1, 1] * r_p[0] ** 2 - 2.0 * g_p[0, 1] * r_p[0] * r_p[1]
+                                + g_p[0, 0] * r_p[1] ** 2) / det)
+        return out[0], out[1]
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values (the prior is the monitor's, set anew)."""
@@ -213,3 +242,4 @@ class FrictionBias:
             raise ValueError(f'friction bias sums: {exc!r}') from None
         (self.g_before, self.b_before, self.g0, self.g1, self.g2, self.b0, self.b1) = sums
         self.usable = state.get('usable', True) is not False
+        self._open = True
