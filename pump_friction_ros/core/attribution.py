@@ -311,12 +311,13 @@ class FaultIsolation:
             # out, as its size is (the same as above where the drift carries nothing)
             choice = choose_friction(stats, self.drift, self.bias, t)
             j, k, t, cos = choice.first, choice.second, choice.t, choice.cos
-            if choice.split is not None:
+            split = choice.split
+            if split is not None and max(abs(split[0] - split[1]), abs(split[2] - split[3])) >= z2:
                 return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[_VP]]} or '
                         f'{_WORDS[CAUSES[_OTHER]]}: the choice turns on whether the baseline '
-                        'was already off before the change (evidence {:.0f} against {:.0f} '
-                        'with that bias fitted, {:.0f} against {:.0f} without)'.format(
-                            *choice.split), -1)
+                        'was already off before the change (evidence: valve plate {:.0f} '
+                        'against other friction {:.0f} with that bias fitted, {:.0f} against '
+                        '{:.0f} without)'.format(*split), -1)
             close = not t[j] - t[k] >= z2
             tied = close and abs(cos) >= self.settings.identifiability_correlation
         if tied:

@@ -43,8 +43,9 @@ isolation's T is divided by). The windows before the change stop ageing while it
 the drift's do. A state written before these sums, loaded during a change, fits no bias
 until that change ends (its sums would begin inside the change and take it for the bias).
 
-Only which friction changed is told so: the size of the change and its interval stay the
-single cause's, relative to the baseline (``attribution``).
+Only which friction changed is told so, and only together with the fit without the bias
+(``friction_choice``: a friction is named where both fits name it): the size of the change
+and its interval stay the single cause's, relative to the baseline (``attribution``).
 """
 
 from __future__ import annotations
@@ -137,8 +138,8 @@ class FrictionBias:
             self.b0 = keep * self.b0 + weight * d_nm * x
             return
         if self._open:  # the change's windows join those before the next one
-            self.g_before += self.g0
-            self.b_before += self.b0
+            self.g_before = self.g_before + self.g0
+            self.b_before = self.b_before + self.b0
             self.g0, self.g1, self.g2 = (np.zeros((_K, _K)) for _ in range(3))
             self.b0, self.b1 = np.zeros(_K), np.zeros(_K)
             self._open = False
@@ -208,8 +209,8 @@ class FrictionBias:
                 continue
             det = g_p[0, 0] * g_p[1, 1] - g_p[0, 1] * g_p[1, 0]
             if det > 1e-9 * g_p[0, 0] * g_p[1, 1]:  # r^T G^-1 r, G 2x2 symmetric
-                out[j] = float((g_p[1, 1] * r_p[0] ** 2 - 2.0 * g_p[0, 1] * r_p[0] * r_p[1]
-                                + g_p[0, 0] * r_p[1] ** 2) / det)
+                out[j] = float((g_p[1, 1] * r_p[0] ** 2 - (g_p[0, 1] + g_p[1, 0]) * r_p[0]
+                                * r_p[1] + g_p[0, 0] * r_p[1] ** 2) / det)
         return out[0], out[1]
 
     def state(self) -> dict[str, object]:

@@ -20,15 +20,18 @@ cycle, so which one changed rests on the small part of the change that is not co
 both; how that part reads depends on what else the fit takes out. Two fits are made
 (``attribution``):
 
-- against the torque constant's drift alone (``drift_nuisance``), each change a line in
-  time where the windows fit one for both (`ChangeStats.line_glr`), else a step;
+- against the torque constant's drift alone (``drift_nuisance``);
 - against that drift and a friction bias the baseline already had before the change
-  (``friction_bias``), the same way.
+  (``friction_bias``);
+
+each change a line in time where both fits have one for both frictions
+(`ChangeStats.line_glr`, `FrictionBias.glr_pair`), else a step in both.
 
 Where both name the same friction, the evidence is the one with the smaller lead: the
-name has to survive either nuisance model. Where they name different ones, the choice
-turns on whether the baseline was already off before the change, which these windows
-cannot settle, and the verdict says so. Measured on the bank (``docs/monitor.md``):
+name has to survive either nuisance model. Where they name different ones and either
+leads by the verdict's margin, the choice turns on whether the baseline was already off
+before the change, which these windows cannot settle, and the verdict says so (a bias fit
+that is not finite counts as none). Measured on the bank (``docs/monitor.md``):
 a cold start whose baseline read the warm pump's valve plate 10 % off named a valve plate
 x1.4 other friction without the bias (leading by more than 100 in T) and the valve plate
 with it; a creep cycle's bearing x1.8 tied without the bias (44052 against 44050) and
@@ -79,7 +82,7 @@ def reconcile(without: tuple[float, float], with_bias: tuple[float, float] | Non
         (T_vp, T_o) against the drift alone [-].
     with_bias : tuple of float or None
         (T_vp, T_o) against the drift and a bias from before the change [-]; None: no bias
-        fitted.
+        fitted (one not finite counts as none).
 
     Returns
     -------
@@ -88,7 +91,7 @@ def reconcile(without: tuple[float, float], with_bias: tuple[float, float] | Non
         bias), and True where the two fits lead with different frictions.
 
     """
-    if with_bias is None:
+    if with_bias is None or not math.isfinite(with_bias[0] - with_bias[1]):
         return without, False
     lead, lead_bias = without[0] - without[1], with_bias[0] - with_bias[1]
     return (without if abs(lead) <= abs(lead_bias) else with_bias), lead * lead_bias < 0.0
@@ -96,17 +99,20 @@ def reconcile(without: tuple[float, float], with_bias: tuple[float, float] | Non
 
 def _fits(stats: ChangeStats, drift: DriftNuisance, bias: FrictionBias, g: np.ndarray,
           b: np.ndarray, told: np.ndarray) -> tuple[list[float], list[float] | None]:
-    # each friction's GLR against the drift alone (a line for both, else a step), and
-    # against the drift and the bias (the same), None where the bias cannot be fitted
+    # each friction's GLR against the drift alone and against the drift and the bias (None
+    # where the bias cannot be fitted), both a line per cause where both fits have one, else
+    # both a step: a difference of form must not pass for the bias's
     lines = [stats.line_glr(i, drift.line_sums(i)) for i in (_VP, _OTHER)]
     plain = [x for x in lines if x is not None]
-    if len(plain) < 2:
-        plain = [float(b[i] ** 2 / g[i, i]) if told[i] else 0.0 for i in (_VP, _OTHER)]
-    for line in (True, False) if stats.count - 2.0 >= 1.0 else (False,):
-        t_vp, t_o = bias.glr_pair(line)
-        if t_vp is not None and t_o is not None:
-            return plain, [t_vp, t_o]
-    return plain, None
+    if len(plain) == 2:
+        fits = bias.glr_pair(True)
+        if fits[0] is not None and fits[1] is not None:
+            return plain, [fits[0], fits[1]]
+    steps = [float(b[i] ** 2 / g[i, i]) if told[i] else 0.0 for i in (_VP, _OTHER)]
+    fits = bias.glr_pair(False)
+    if fits[0] is not None and fits[1] is not None:
+        return steps, [fits[0], fits[1]]
+    return (plain if len(plain) == 2 else steps), None
 
 
 def choose_friction(stats: ChangeStats, drift: DriftNuisance, bias: FrictionBias,
@@ -147,5 +153,6 @@ def choose_friction(stats: ChangeStats, drift: DriftNuisance, bias: FrictionBias
     cos = float(g[_VP, _OTHER] / math.sqrt(g[_VP, _VP] * g[_OTHER, _OTHER])) \
         if told[_VP] and told[_OTHER] else 0.0
     first, second = (_VP, _OTHER) if t[_VP] >= t[_OTHER] else (_OTHER, _VP)
-    return FrictionChoice(first, second, t, cos,
-                          (*with_bias, *without) if split and with_bias is not None else None)
+    if not split or with_bias is None:
+        return FrictionChoice(first, second, t, cos, None)
+    return FrictionChoice(first, second, t, cos, (*with_bias, *without))
