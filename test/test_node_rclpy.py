@@ -179,10 +179,14 @@ def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
         end = time.monotonic() + 20.0
         while node.core.monitor.level == 0 and time.monotonic() < end:
             send(1.0)  # +1 N m of friction: a simulated wear step
-        spin_until(ex, lambda: probe.diagnostics, 1.0)
+        assert node.core.monitor.level != 0, 'no alarm within 20 s of the wear step'
+        # the next status that reports it: one published before the level changed may still
+        # be on its way (seen on a loaded machine)
+        alarm = (level_from_msg(DiagnosticStatus.WARN), level_from_msg(DiagnosticStatus.ERROR))
+        spin_until(ex, lambda: any(level_from_msg(m.status[0].level) in alarm
+                                   for m in probe.diagnostics), 2.0)
         levels += [level_from_msg(m.status[0].level) for m in probe.diagnostics]
-        assert levels[-1] in (level_from_msg(DiagnosticStatus.WARN),
-                              level_from_msg(DiagnosticStatus.ERROR))
+        assert levels[-1] in alarm
     finally:
         ex.shutdown()
         probe.destroy_node()
