@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 from pump_friction_ros.app.cli import main
 from pump_friction_ros.core.estimator import TorqueEstimator
+from pump_friction_ros.core.friction_bias import Z95
 from pump_friction_ros.core.inputs import InputKind
 from pump_friction_ros.core.monitor import OK
 from pump_friction_ros.evaluation.bank import (
@@ -35,6 +36,7 @@ from pump_friction_ros.evaluation.bank import (
 )
 from pump_friction_ros.evaluation.report import (
     bank_figures,
+    covers,
     format_table,
     nearest_rank,
     write_outputs,
@@ -348,3 +350,16 @@ def test_the_bank_imports_no_ros():
                   if isinstance(node, ast.ImportFrom) and node.module and not node.level}
         assert not names & ros, path.name
         assert len(path.read_text().splitlines()) < 500, path.name
+
+
+@pytest.mark.parametrize('std', [0.05137891297383193, 0.051378912973831986, 0.5696378345519036,
+                                 0.5696378345519236])
+def test_an_interval_that_ends_at_the_truth_covers_it_on_either_numpy(std):
+    # an interval spanning no change ends at 1 exactly; the scale and std recorded by the
+    # bank on numpy 2.4 and 2.5 (setpoint lag, joints x3; creep, bearing x1.8) reach it
+    # within a last digit either way, and a miss by a millionth of the half-width is one
+    edge = 1.0 + Z95 * std
+    assert covers(edge, 1.0, std) and covers(2.0 - edge, 1.0, std)
+    assert not covers(1.0 + Z95 * std * (1.0 + 1e-6), 1.0, std)
+    assert covers(1.1007008189935283, 1.0, 0.05137891297383193)
+    assert covers(1.1007008189935283, 1.0, 0.051378912973831986)

@@ -48,7 +48,7 @@ from .bank import BankResult, RunRecord
 from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
 from ..core.friction_bias import Z95  # the monitor's: its intervals are judged by their own
 
-__all__ = ['bank_figures', 'format_table', 'nearest_rank', 'write_outputs']
+__all__ = ['bank_figures', 'covers', 'format_table', 'nearest_rank', 'write_outputs']
 
 _ATTRIBUTION_HEAD = {'valve_plate': 'vp', 'other_friction': 'other', 'not_friction': 'not fr',
                      'cannot_tell': '?', 'none': 'none'}
@@ -88,6 +88,30 @@ def _rate(count: float, hours: float) -> float:
 
 def _fraction(flags: list[bool]) -> float:
     return sum(flags) / len(flags) if flags else math.nan
+
+
+def covers(scale: float, truth: float, std: float) -> bool:
+    """
+    Return whether a reported scale's 95 % interval holds the truth, its edges included.
+
+    An interval that spans no change until one cause is confirmed ends at 1 exactly, a
+    healthy component's truth; the value +- Z95 std reaches it within rounding, so the edge
+    is widened by 1e-9 of the half-width (one numpy's last digit is not a miss).
+
+    Parameters
+    ----------
+    scale, truth : float
+        Reported and true scale [-].
+    std : float
+        Reported std: the 95 % half-width / Z95 [-].
+
+    Returns
+    -------
+    bool
+        True where |scale - truth| <= Z95 std (1 + 1e-9).
+
+    """
+    return abs(scale - truth) <= Z95 * std * (1.0 + 1e-9)
 
 
 def _median(values: list[float]) -> float:
@@ -195,7 +219,7 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
                            if r.truth_class == 'valve_plate' and family in (r.family, 'all')])
         for family in [*families, 'all']}
     fig['coverage_vp_by_family'] = {
-        family: _fraction([abs(r.vp_scale - r.vp_truth) <= Z95 * r.vp_std for r in records
+        family: _fraction([covers(r.vp_scale, r.vp_truth, r.vp_std) for r in records
                            if family in (r.family, 'all')]) for family in [*families, 'all']}
     groups = {**by_fault, 'all': records}
     vp_err = {f: [r.vp_scale - r.vp_truth for r in runs] for f, runs in groups.items()}
@@ -207,10 +231,10 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     fig['other_scale_error_median'] = {f: _median(e) for f, e in other_err.items()}
     fig['other_scale_error_p90_abs'] = {f: nearest_rank(map(abs, e), 90.0)
                                         for f, e in other_err.items()}
-    fig['coverage_vp'] = {f: _fraction([abs(r.vp_scale - r.vp_truth) <= Z95 * r.vp_std
+    fig['coverage_vp'] = {f: _fraction([covers(r.vp_scale, r.vp_truth, r.vp_std)
                                         for r in runs]) for f, runs in groups.items()}
     fig['coverage_other'] = {
-        f: _fraction([abs(r.other_scale - r.other_truth) <= Z95 * r.other_std for r in runs])
+        f: _fraction([covers(r.other_scale, r.other_truth, r.other_std) for r in runs])
         for f, runs in other.items()}
     return fig
 
