@@ -34,6 +34,12 @@ from pump_friction_ros.evaluation.bank import (
     run_bank,
     RunRecord,
 )
+from pump_friction_ros.evaluation.floors import (
+    floor_figures,
+    format_floors,
+    in_scope,
+    least_delay_s,
+)
 from pump_friction_ros.evaluation.report import (
     bank_figures,
     covers,
@@ -42,6 +48,7 @@ from pump_friction_ros.evaluation.report import (
     write_outputs,
 )
 from pump_friction_ros.evaluation.scenarios import (
+    running_fault_torque_nm,
     Scenario,
     simulate_scenario,
     warm_up_temperature,
@@ -325,7 +332,10 @@ def test_quick_bank_end_to_end(quick, tmp_path):
                   'pressure_gain_1.05'):  # never blamed on the valve plate
         assert all(r.attribution != 'valve_plate' for r in records if r.fault == fault)
     table = format_table(fig, quick)
-    assert len(table.splitlines()) == 2 + 5 + len(faults) + 3  # head, rows, legend, footer
+    main_table, floors = table.split('\n\n| fault ')
+    assert len(main_table.splitlines()) == 2 + 5 + len(faults) + 3  # head, rows, legend, footer
+    assert floors.count('| in scope of runs') == len(faults)
+    assert floors.count('| fault torque running, N m') == len(faults)
     for name in [f.label for f in FAMILIES] + sorted(faults):
         assert name in table
     assert '| valve-plate faults named vp' in table and '| cov vp, all runs' in table
@@ -363,3 +373,79 @@ def test_an_interval_that_ends_at_the_truth_covers_it_on_either_numpy(std):
     assert not covers(1.0 + Z95 * std * (1.0 + 1e-6), 1.0, std)
     assert covers(1.1007008189935283, 1.0, 0.05137891297383193)
     assert covers(1.1007008189935283, 1.0, 0.051378912973831986)
+
+
+# -- the floors: on the runs where the fault's torque exceeds the allowance ----------
+
+def test_the_fault_torque_while_running_is_each_faults_closed_form():
+    n = 6
+    levels = (0.10, 0.05, 0.02, 0.01)
+    friction = {f'{c}_nm': np.full(n, v) for c, v in zip(COMPONENTS, levels, strict=True)}
+    friction['valve_plate_nm'][::2] *= -1.0  # signed: motoring samples
+    theoretical, delivered = np.full(n, 8.0), np.full(n, 10.0)
+    direction = np.array([1.0, -1.0] * 3)
+    running = np.array([True] * 5 + [False])
+    friction['bearing_nm'][-1] = 100.0  # not running: not counted
+
+    def torque(name, mask=running):
+        return running_fault_torque_nm(FAULT[name], friction, theoretical, delivered,
+                                       direction, mask)
+
+    expected = {'valve_plate_x1.4': 0.04, 'valve_plate_ramp_1.6': 0.06,  # at its full size
+                'valve_plate_intermittent_1.8': 0.08, 'bearing_x2.0': 0.05, 'joints_x3': 0.04,
+                'drive_loss_+0.2nm': 0.2, 'torque_offset_+0.2nm': 0.2,
+                'torque_constant_-5%': 0.5, 'pressure_gain_1.05': 0.4}
+    for name, value in expected.items():
+        assert torque(name) == pytest.approx(value, rel=1e-12), name
+    assert math.isnan(torque('nominal'))
+    assert math.isnan(torque('bearing_x2.0', np.zeros(n, dtype=bool)))
+
+
+@pytest.mark.parametrize('family', ['trapezoid', 'eha_pick_place'])
+def test_a_runs_fault_torque_scales_with_the_fault_factor_minus_one(table, family):
+    # the same name, so the same draws: the motion, the pump and the oil are the run's
+    def fault_torque(factor):
+        fault = Fault('vp', 'valve_plate', factor, valve_plate=factor, scope='all')
+        sim = simulate_scenario(scenario(family, fault, duration_s=40.0, onset_s=10.0), table)
+        return sim.fault_running_nm
+
+    small, large = fault_torque(1.2), fault_torque(2.0)
+    assert 0.0 < small < large
+    assert large / small == pytest.approx(5.0, rel=1e-9)  # (2.0 - 1) / (1.2 - 1)
+    assert math.isnan(simulate_scenario(scenario(family, duration_s=40.0, onset_s=10.0),
+                                        table).fault_running_nm)
+
+
+def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not():
+    vp = {'family': 'eha_pick_place', 'fault': 'valve_plate_x1.4', 'allowance_nm': 0.025,
+          'warn_nm_s': 0.6}
+    records = [
+        record(**vp, fault_running_nm=0.05, first_alarm_s=1810.0, monitored_delay_s=10.0,
+               attribution='valve_plate'),
+        record(**vp, fault_running_nm=0.04, first_alarm_s=1830.0, monitored_delay_s=30.0,
+               attribution='cannot_tell'),
+        record(**vp, fault_running_nm=0.025),  # at k: the CUSUM cannot move
+        record(**vp, fault_running_nm=0.5, baseline_at_onset=False),  # the fault in it
+        record(family='eha_pick_place', fault='nominal', truth_class='nominal'),
+        record(family='eha_pick_place', fault='bearing_x2.0', truth_class='other_friction',
+               fault_running_nm=0.1, allowance_nm=0.025, first_alarm_s=1805.0,
+               monitored_delay_s=2.0, attribution='valve_plate'),
+    ]
+    floors = floor_figures(records)
+    assert set(floors['faults']) == {'valve_plate_x1.4', 'bearing_x2.0'}
+    cell = floors['faults']['valve_plate_x1.4']['eha_pick_place']
+    assert (cell['runs'], cell['in_scope'], cell['learnt_late'], cell['below_k']) == (4, 2, 1, 1)
+    assert cell['not_detected'] == 0 and cell['monitored_delay_p90_s'] == 30.0
+    # the earliest a CUSUM can warn: h / (dT - k), 0.6 / 0.025 and 0.6 / 0.015 s
+    assert cell['least_delay_p90_s'] == pytest.approx(40.0)
+    assert least_delay_s(records[0]) == pytest.approx(24.0)
+    assert least_delay_s(records[2]) == math.inf and math.isnan(least_delay_s(record()))
+    assert (cell['named'], cell['cannot_tell']) == (1, 1)
+    assert (cell['fault_nm_min'], cell['fault_nm_max']) == (0.025, 0.5)
+    bearing = floors['faults']['bearing_x2.0']['all']
+    assert (bearing['named'], bearing['named_vp']) == (0, 1)
+    text = format_floors(floors)
+    assert '2/4 (1 learnt late, 1 below k)' in text and '1/2 (1 ?)' in text
+    assert '0.025-0.500' in text  # the fault's running torque over the runs
+    assert '30.0 [40.0]' in text
+    assert in_scope(record())  # written before the fields were kept: unknown, in scope

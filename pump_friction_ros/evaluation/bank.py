@@ -53,8 +53,9 @@ from ..physics.pump_parameters import load_pump, PumpParams
 from ..table.friction_table import FrictionTable, TableSpec
 from ..table.table_files import cached_table
 
-__all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'build_scenarios',
-           'prepare_true_tables', 'read_monitor', 'run_bank', 'run_scenario']
+__all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'baseline_learnt',
+           'build_scenarios', 'prepare_true_tables', 'read_monitor', 'run_bank',
+           'run_scenario']
 
 _NS = 1_000_000_000
 _CHUNK = 1 << 16  # events converted to Python floats at a time (bounds memory)
@@ -101,6 +102,11 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
                           mon.theta_rest, mon.rest_scale_std)
 
 
+def baseline_learnt(core: TorqueEstimator) -> bool:
+    """Return whether the estimator's monitor has learnt its healthy baseline."""
+    return core.monitor.baseline is not None
+
+
 @dataclass(frozen=True)
 class RunRecord:
     """One run reduced to its figures (times in s from the start of the run)."""
@@ -127,6 +133,13 @@ class RunRecord:
     above_min_speed_fraction: float  # joint-state samples with |speed| >= monitor min speed
 
     monitored_delay_s: float  # monitored running from the onset to the first alarm; inf: none
+    # the issue's floors hold "where the fault's torque exceeds the CUSUM allowance while
+    # running", on a baseline learnt before the fault (a fault commissioning saw is not a
+    # change); defaults: a record written before these were kept (unknown: in scope)
+    fault_running_nm: float = math.nan  # mean |torque the fault adds| running [N m]
+    allowance_nm: float = math.nan  # the run's CUSUM allowance k [N m]
+    warn_nm_s: float = math.nan  # the run's CUSUM WARN threshold h [N m s]
+    baseline_at_onset: bool = True  # the baseline was learnt at the onset
 
     @property
     def delay_s(self) -> float:
@@ -280,12 +293,13 @@ def prepare_true_tables(scenarios: list[Scenario]) -> int:
 
 
 def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
-          ) -> tuple[int, int | None, int]:
+          ) -> tuple[int, int | None, int, bool]:
     """
     Feed the signals in stamp order.
 
-    Returns alarm entries before the onset, the first alarm's stamp, and the monitored
-    samples between the onset and that alarm (or the end).
+    Returns alarm entries before the onset, the first alarm's stamp, the monitored samples
+    between the onset and that alarm (or the end), and whether the healthy baseline was
+    learnt at the onset (at the end of a run without one).
     """
     stamps = [np.round(x * 1e9).astype(np.int64)
               for x in (sim.temperature_t_s, sim.pressure_t_s, sim.t_s)]
@@ -300,6 +314,7 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
     previous, before, first, monitored = OK, 0, None, 0
     counts = core.counts
     at_onset = -1
+    learnt_at_onset = False
     for start in range(0, order.size, _CHUNK):
         part = order[start:start + _CHUNK]
         for ns, kind, value, tq in zip(stamp[part].tolist(), kinds[part].tolist(),
@@ -311,6 +326,7 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                     continue
                 if at_onset < 0 and ns >= onset_ns:
                     at_onset = counts['monitor_samples']
+                    learnt_at_onset = baseline_learnt(core)
                 level = est.level  # the level the node publishes with this estimate
                 if level != previous:
                     if previous == OK and ns < onset_ns:
@@ -325,7 +341,9 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                 on_input(temperature, ns, value, None, ns)
     if first is None:
         monitored = counts['monitor_samples'] - max(at_onset, 0)
-    return before, first, monitored
+    if at_onset < 0:  # no onset (the nominal pump): learnt by the end
+        learnt_at_onset = baseline_learnt(core)
+    return before, first, monitored, learnt_at_onset
 
 
 def run_scenario(scenario: Scenario) -> RunRecord:
@@ -345,10 +363,11 @@ def run_scenario(scenario: Scenario) -> RunRecord:
     """
     params, table = _pump_and_table()
     sim = simulate_scenario(scenario, table)
-    core = TorqueEstimator(scenario.estimator_config(), _node_table(_node_spec(scenario)),
+    config = scenario.estimator_config()
+    core = TorqueEstimator(config, _node_table(_node_spec(scenario)),
                            params.oil.viscosity_m2_s, params.name)
     onset_ns = scenario.onset_s * 1e9
-    before, first, monitored = _feed(core, sim, onset_ns)
+    before, first, monitored, learnt = _feed(core, sim, onset_ns)
     period_s = float(sim.t_s[1] - sim.t_s[0])
     reading = read_monitor(core)
     fault = scenario.fault
@@ -364,7 +383,10 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         other_truth_exact=sim.other_truth_exact,
         monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,
         above_min_speed_fraction=sim.above_min_speed_fraction,
-        monitored_delay_s=math.inf if first is None else monitored * period_s)
+        monitored_delay_s=math.inf if first is None else monitored * period_s,
+        fault_running_nm=sim.fault_running_nm, allowance_nm=config.cusum_drift_nm,
+        warn_nm_s=config.cusum_warn_nm_s,
+        baseline_at_onset=learnt)
 
 
 def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,

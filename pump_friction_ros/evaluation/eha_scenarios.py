@@ -41,7 +41,7 @@ import numpy as np
 
 from .closed_loop import ClosedLoopRun, draw_plant, make_setpoints, Plant, simulate_closed_loop
 from .eha_settings import EhaSettings, OIL_GRADES, OilGrade, TemperatureSettings
-from .scenarios import Scenario, SimulatedScenario
+from .scenarios import running_fault_torque_nm, Scenario, SimulatedScenario
 from .sensors import (
     bursts,
     draw_sensors,
@@ -330,6 +330,8 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
                      for c in COMPONENTS[1:])
     other_healthy = sum(np.abs(true[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
     other_truth = _ratio(np.asarray(other_true), np.asarray(other_healthy))
+    fault_running = running_fault_torque_nm(fault, true, true['theoretical_nm'], delivered,
+                                            direction, gate & (t >= onset))
     del true, delivered
     # message streams: bursts hit every stream of the bus; drops and duplicates per message
     windows = bursts(scenario.duration_s, sens.burst_rate_per_h, s.sensors.burst_length_s, rng)
@@ -353,7 +355,8 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
         true_pressure_diff_pa=dp[joint], true_viscosity_m2_s=visc[joint],
         true_temperature_c=temp_true, motion=motion, vp_truth=vp_truth,
         other_truth=other_truth, other_truth_exact=False,
-        above_min_speed_fraction=float(np.mean(np.abs(speed) >= config.monitor_min_speed_rad_s)))
+        above_min_speed_fraction=float(np.mean(np.abs(speed) >= config.monitor_min_speed_rad_s)),
+        fault_running_nm=fault_running)
 
 
 def _walther_array(law: WaltherViscosity, temperature_c: np.ndarray) -> np.ndarray:

@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from .bank import BankResult, RunRecord
+from .floors import floor_figures, format_floors
 from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
 from ..core.friction_bias import Z95  # the monitor's: its intervals are judged by their own
 
@@ -163,7 +164,9 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
         * ``vp_scale_error_median``, ``vp_scale_error_p90_abs``,
           ``other_scale_error_median``, ``other_scale_error_p90_abs``, ``coverage_vp``,
           ``coverage_other`` (per fault, and 'all'); ``coverage_vp_by_family`` (all runs of
-          each family).
+          each family);
+        * ``floors``: the issue's floors on the fault runs in their scope
+          (`floors.floor_figures`).
 
     """
     records = list(records)
@@ -236,6 +239,7 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     fig['coverage_other'] = {
         f: _fraction([covers(r.other_scale, r.other_truth, r.other_std) for r in runs])
         for f, runs in other.items()}
+    fig['floors'] = floor_figures(records)
     return fig
 
 
@@ -336,6 +340,9 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
                    f'({figures["nominal_hours"]["all"]:.2f} h nominal), '
                    f'{result.runtime_s:.0f} s on {result.workers} worker(s) '
                    f'({result.cpu_s:.0f} s CPU).')
+    floors = format_floors(figures['floors']) if 'floors' in figures else ''
+    if floors:
+        out += ['', floors]
     return '\n'.join(out)
 
 

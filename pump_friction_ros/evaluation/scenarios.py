@@ -56,8 +56,8 @@ from ..physics.oil import WaltherViscosity
 from ..sim.duty_cycle import DutyCycle, trapezoid_speed_profile
 from ..table.friction_table import FrictionTable
 
-__all__ = ['Scenario', 'SimulatedScenario', 'simulate_scenario', 'speed_profile',
-           'warm_up_temperature']
+__all__ = ['Scenario', 'SimulatedScenario', 'running_fault_torque_nm', 'simulate_scenario',
+           'speed_profile', 'warm_up_temperature']
 
 _NS = 1_000_000_000
 
@@ -123,6 +123,9 @@ class SimulatedScenario:
     other_truth: float  # factor of the other components at the end (see other_truth_exact)
     other_truth_exact: bool  # the other components share one factor; else a fitted ratio
     above_min_speed_fraction: float
+    fault_running_nm: float = math.nan
+    """Mean |torque the fault adds at its full size| over the running samples after the
+    onset [N m] (`running_fault_torque_nm`); NaN for the nominal pump."""
 
 
 def _draw(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
@@ -294,6 +297,54 @@ def _step(value: float, t: np.ndarray, onset_s: float) -> np.ndarray | float:
     return 0.0 if value == 0.0 else np.where(t >= onset_s, value, 0.0)
 
 
+def running_fault_torque_nm(fault: Fault, friction_nm: dict[str, np.ndarray],
+                            theoretical_nm: np.ndarray, delivered_nm: np.ndarray,
+                            direction: np.ndarray, running: np.ndarray) -> float:
+    """
+    Return the torque a fault at its full size adds to the residual, over running [N m].
+
+    What the issue's floors are conditioned on ("where the fault's torque exceeds the
+    CUSUM allowance while running"): the mean over the running samples of |dT|, with dT
+    what the fault moves measured minus modelled torque by at its full size (the end of a
+    ramp, an intermittent fault's on episodes): (f_c - 1) T_c per friction component,
+    the extra drive loss times the direction of rotation, the torque offset, (g - 1) times
+    the delivered torque for a torque-constant change g, and -(g - 1) T_th for a pressure
+    gain g (the model's theoretical torque moves with the measured pressure).
+
+    Parameters
+    ----------
+    fault : Fault
+        The fault.
+    friction_nm : dict of ndarray
+        Signed friction components of the true pump, ``'<component>_nm'`` keys [N m].
+    theoretical_nm, delivered_nm, direction : ndarray
+        Theoretical torque V_g dp / (2 pi) [N m], torque the motor delivers [N m] and
+        tanh(speed / w0) [-], on the same samples.
+    running : ndarray of bool
+        The samples to average over: running after the onset.
+
+    Returns
+    -------
+    float
+        The mean [N m]; NaN for the nominal pump or where nothing runs.
+
+    """
+    if fault.truth_class == 'nominal' or not running.any():
+        return math.nan
+    added = np.zeros(int(np.count_nonzero(running)))
+    for c, factor in fault.factors.items():
+        if factor != 1.0:
+            added += (factor - 1.0) * friction_nm[f'{c}_nm'][running]
+    if fault.drive_loss_nm:
+        added += fault.drive_loss_nm * direction[running]
+    added += fault.torque_offset_nm
+    if fault.torque_gain != 1.0:
+        added += (fault.torque_gain - 1.0) * delivered_nm[running]
+    if fault.pressure_gain != 1.0:
+        added -= (fault.pressure_gain - 1.0) * theoretical_nm[running]
+    return float(np.mean(np.abs(added)))
+
+
 def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     """
     Make a scenario's signals (deterministic: the scenario's seed fixes every draw).
@@ -353,11 +404,14 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
     vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
     others = [fault.bearing, fault.spherical_joints, fault.piston_heads]
     exact = len(set(others)) == 1
+    # running after the onset, where the monitor learns (true speed and acceleration)
+    gate = (t >= onset) & (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
+        (np.abs(accel) <= config.monitor_max_accel_rad_s2)
+    fault_running = running_fault_torque_nm(fault, res, res['theoretical_nm'], torque,
+                                            direction, gate)
     if exact:
         other_truth = others[0]
     else:  # least-squares ratio of true to modelled other friction where the monitor learns
-        gate = (t >= onset) & (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
-            (np.abs(accel) <= config.monitor_max_accel_rad_s2)
         model = sum(np.abs(res[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
         true = sum(factors[c] * np.abs(res[f'{c}_nm']) for c in COMPONENTS[1:])
         true = np.broadcast_to(true, t.shape)[gate]
@@ -379,4 +433,4 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
         true_speed_rad_s=speed, true_accel_rad_s2=accel, true_pressure_diff_pa=dp,
         true_viscosity_m2_s=visc, true_temperature_c=temp_true, motion=motion,
         vp_truth=vp_truth, other_truth=float(other_truth), other_truth_exact=exact,
-        above_min_speed_fraction=above)
+        above_min_speed_fraction=above, fault_running_nm=fault_running)

@@ -1,0 +1,246 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The issue's floors, on the runs they are stated for, and why the others are not.
+
+Issue #17 states its detection and naming floors "per family where the fault's torque
+exceeds the CUSUM allowance while running". A fault run is **in scope** where
+
+* the torque the fault adds at its full size, averaged over the running samples after the
+  onset (``RunRecord.fault_running_nm``, from the simulation's truth), exceeds the run's
+  CUSUM allowance k (``allowance_nm``): below it the CUSUM cannot accumulate, by design;
+* and the healthy baseline was learnt before the onset (``baseline_at_onset``): a fault
+  that commissioning saw is part of the healthy signature, not a change from it.
+
+`floor_figures` counts, per fault and family, the runs in scope and the reason for each
+run out of it, and states the floors on the runs in scope:
+
+* the p90 of the monitored running to detection, beside the least a CUSUM needs,
+  h / (dT - k) (its sum grows by at most dT - k per second of running, dT the fault's
+  running torque, h the WARN threshold);
+* valve-plate faults named valve plate, and `cannot tell`;
+* other faults named valve plate, and a torque-constant change named a measurement change
+  (`not friction`).
+
+`format_floors` prints them as a Markdown table. A record without the fields (written
+before they were kept) counts as in scope.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+import math
+from typing import Any
+
+from .bank import RunRecord
+from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS
+
+__all__ = ['floor_figures', 'format_floors', 'in_scope', 'least_delay_s', 'scope_reason']
+
+
+def scope_reason(record: RunRecord) -> str:
+    """
+    Return why a fault run is outside the floors' scope, or '' where it is inside.
+
+    Parameters
+    ----------
+    record : RunRecord
+        A run (the nominal pump's runs have no scope: 'nominal').
+
+    Returns
+    -------
+    str
+        '' (in scope), 'nominal', 'learnt late' (the baseline was learnt after the onset)
+        or 'below k' (the fault's running torque is at or below the allowance).
+
+    """
+    if record.truth_class == 'nominal':
+        return 'nominal'
+    if not record.baseline_at_onset:
+        return 'learnt late'
+    if record.fault_running_nm <= record.allowance_nm:  # NaN (unknown): in scope
+        return 'below k'
+    return ''
+
+
+def in_scope(record: RunRecord) -> bool:
+    """Return whether a fault run is one the issue's floors are stated for."""
+    return scope_reason(record) == ''
+
+
+def least_delay_s(record: RunRecord) -> float:
+    """
+    Return the least monitored running a CUSUM needs to reach WARN on a run's fault [s].
+
+    Its sum grows by the fault's running torque dT less the allowance k per second of
+    running at most (all of dT seen by one sum, nothing taken off it), so it reaches the
+    WARN threshold h after h / (dT - k) at the earliest; inf where dT <= k, NaN where dT is
+    unknown. A floor below this on the mean is out of any CUSUM's reach with this k and h.
+
+    Parameters
+    ----------
+    record : RunRecord
+        A fault run.
+
+    Returns
+    -------
+    float
+        h / (dT - k) [s].
+
+    """
+    excess = record.fault_running_nm - record.allowance_nm
+    if math.isnan(excess) or math.isnan(record.warn_nm_s):
+        return math.nan
+    return record.warn_nm_s / excess if excess > 0.0 else math.inf
+
+
+def _p90(values: list[float]) -> float:
+    ordered = sorted(values)
+    return ordered[max(math.ceil(0.9 * len(ordered)), 1) - 1] if ordered else math.nan
+
+
+def _order(names: set[str], reference: list[str]) -> list[str]:
+    return [n for n in reference if n in names] + sorted(names - set(reference))
+
+
+def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
+    """
+    Reduce a bank's fault runs to the floors on the runs in scope.
+
+    Parameters
+    ----------
+    records : sequence of RunRecord
+        The runs (nominal runs are left out).
+
+    Returns
+    -------
+    dict
+        ``faults`` -> fault -> family (and 'all') -> dict with ``runs``, ``in_scope``,
+        ``learnt_late``, ``below_k``, ``not_detected`` (in scope), ``monitored_delay_p90_s``
+        (in scope; inf where more than a tenth were missed), ``least_delay_p90_s`` (the same
+        percentile of `least_delay_s`, in scope), ``named`` (in scope, named as
+        its class should be), ``named_vp`` (in scope, named valve plate), ``cannot_tell``
+        (in scope), ``fault_nm_min`` / ``fault_nm_max`` (the fault's running torque over
+        all the runs [N m]); ``classes`` -> fault -> its true class; ``families``: 'all'
+        and the families, in table order. Named: as ``settings.ACCEPTED_ATTRIBUTIONS``
+        accepts for the fault's class.
+
+    """
+    faults = [r for r in records if r.truth_class != 'nominal']
+    families = _order({r.family for r in faults}, [f.name for f in FAMILIES])
+    names = _order({r.fault for r in faults}, [f.name for f in FAULTS])
+    out: dict[str, Any] = {'faults': {}, 'classes': {}, 'families': ['all', *families]}
+    for name in names:
+        runs = [r for r in faults if r.fault == name]
+        out['classes'][name] = runs[0].truth_class
+        out['faults'][name] = {}
+        for family in out['families']:
+            mine = [r for r in runs if family in (r.family, 'all')]
+            if not mine:
+                continue
+            reasons = [scope_reason(r) for r in mine]
+            scoped = [r for r, why in zip(mine, reasons, strict=True) if not why]
+            torques = [r.fault_running_nm for r in mine if math.isfinite(r.fault_running_nm)]
+            right = ACCEPTED_ATTRIBUTIONS[mine[0].truth_class]
+            out['faults'][name][family] = {
+                'runs': len(mine), 'in_scope': len(scoped),
+                'learnt_late': reasons.count('learnt late'),
+                'below_k': reasons.count('below k'),
+                'not_detected': sum(not math.isfinite(r.first_alarm_s) for r in scoped),
+                'monitored_delay_p90_s': _p90([r.monitored_delay_s for r in scoped]),
+                'least_delay_p90_s': _p90([least_delay_s(r) for r in scoped]),
+                'named': sum(r.attribution in right for r in scoped),
+                'named_vp': sum(r.attribution == 'valve_plate' for r in scoped),
+                'cannot_tell': sum(r.attribution == 'cannot_tell' for r in scoped),
+                'fault_nm_min': min(torques, default=math.nan),
+                'fault_nm_max': max(torques, default=math.nan),
+            }
+    return out
+
+
+def _cell(c: dict[str, Any], kind: str) -> str:
+    if kind == 'scope':
+        why = [f'{c[k]} {k.replace("_", " ")}' for k in ('learnt_late', 'below_k') if c[k]]
+        return f'{c["in_scope"]}/{c["runs"]}' + (f' ({", ".join(why)})' if why else '')
+    if kind == 'torque':
+        low, high = c['fault_nm_min'], c['fault_nm_max']
+        return '-' if math.isnan(low) else f'{low:.3f}-{high:.3f}'
+    if not c['in_scope']:
+        return '-'
+    if kind == 'delay':
+        p90, least = c['monitored_delay_p90_s'], c['least_delay_p90_s']
+        text = 'nd' if math.isinf(p90) else f'{p90:.1f}'
+        text += f' ({c["not_detected"]} nd)' if c['not_detected'] else ''
+        return text + ('' if math.isnan(least) else f' [{least:.1f}]')
+    if kind == 'named':
+        text = f'{c["named"]}/{c["in_scope"]}'
+        return text + (f' ({c["cannot_tell"]} ?)' if c['cannot_tell'] else '')
+    return f'{c["named_vp"]}/{c["in_scope"]}'
+
+
+def _row(per_family: dict[str, Any], families: list[str], first: str, label: str,
+         kind: str) -> list[str]:
+    return [first, label, *(_cell(per_family[f], kind) if f in per_family else ''
+                            for f in families)]
+
+
+def format_floors(floors: dict[str, Any]) -> str:
+    """
+    Format `floor_figures` as one Markdown table with its legend.
+
+    Parameters
+    ----------
+    floors : dict
+        From `floor_figures`.
+
+    Returns
+    -------
+    str
+        The table ('' where the bank has no fault runs).
+
+    """
+    table = floors['faults']
+    if not table:
+        return ''
+    labels = {f.name: f.label for f in FAMILIES}
+    families = floors['families']
+    head = ['fault', 'floor on the runs in scope', *(labels.get(f, f) for f in families)]
+    rows = []
+    for name, per_family in table.items():
+        rows.append(_row(per_family, families, name, 'in scope of runs', 'scope'))
+        rows.append(_row(per_family, families, '', 'fault torque running, N m', 'torque'))
+        rows.append(_row(per_family, families, '', 'mon p90 s (nd) [least]', 'delay'))
+        if floors['classes'][name] == 'valve_plate':
+            rows.append(_row(per_family, families, '', 'named vp (? cannot tell)', 'named'))
+        else:
+            rows.append(_row(per_family, families, '', 'named right (? cannot tell)', 'named'))
+            rows.append(_row(per_family, families, '', 'named vp', 'vp'))
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(head)]
+
+    def line(cells: list[str]) -> str:
+        return '| ' + ' | '.join(c.ljust(w) for c, w in zip(cells, widths, strict=True)) + ' |'
+
+    legend = ('In scope (the issue\'s floors hold "where the fault\'s torque exceeds the '
+              'CUSUM allowance while running"): the torque the fault adds at its full size, '
+              'averaged over running after the onset, above the allowance k, and the '
+              'healthy baseline learnt before the onset. Out: "learnt late" (the baseline '
+              'completed after the onset: the fault is in it), "below k". mon p90: '
+              'monitored running from the onset to the first alarm (nearest rank); least: '
+              'the same percentile of h / (fault torque - k), the earliest a CUSUM reaches '
+              'WARN. '
+              'Floors: x1.8 <= 15 s, x1.4 <= 40 s; >= 90 % named vp, <= 10 % cannot tell; '
+              'no other fault named vp; torque constant named not friction.')
+    return '\n'.join([line(head), '|' + '|'.join('-' * (w + 2) for w in widths) + '|',
+                      *(line(r) for r in rows), '', legend])
