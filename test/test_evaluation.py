@@ -32,6 +32,7 @@ from pump_friction_ros.evaluation.bank import (
     build_scenarios,
     read_monitor,
     run_bank,
+    run_scenario,
     RunRecord,
 )
 from pump_friction_ros.evaluation.floors import (
@@ -39,6 +40,7 @@ from pump_friction_ros.evaluation.floors import (
     format_floors,
     in_scope,
     least_delay_s,
+    scope_reason,
 )
 from pump_friction_ros.evaluation.report import (
     bank_figures,
@@ -324,6 +326,9 @@ def test_quick_bank_end_to_end(quick, tmp_path):
     for r in records:
         assert r.attribution in ('valve_plate', 'other_friction', 'not_friction',
                                  'cannot_tell', 'none')
+        assert (r.allowance_nm, r.warn_nm_s) == (CONFIG.cusum_drift_nm, CONFIG.cusum_warn_nm_s)
+        assert (r.truth_class == 'nominal') == math.isnan(r.fault_running_nm)
+        assert r.baseline_learnt_s > 0.0  # a time of the run, or inf: never
         assert 0.0 <= r.monitored_fraction <= 1.0 and 0.0 <= r.above_min_speed_fraction <= 1.0
     # targets of the issue that the quick bank can show (the full bank: docs/monitor.md)
     assert sum(fig['false_alarms'][f] for f in CLASSIC) == 0  # the realistic ones: see docs
@@ -383,22 +388,40 @@ def test_the_fault_torque_while_running_is_each_faults_closed_form():
     friction = {f'{c}_nm': np.full(n, v) for c, v in zip(COMPONENTS, levels, strict=True)}
     friction['valve_plate_nm'][::2] *= -1.0  # signed: motoring samples
     theoretical, delivered = np.full(n, 8.0), np.full(n, 10.0)
-    direction = np.array([1.0, -1.0] * 3)
+    direction = np.array([0.5, -1.0] * 3)  # tanh(speed / w0): 0.5 near zero speed
     running = np.array([True] * 5 + [False])
     friction['bearing_nm'][-1] = 100.0  # not running: not counted
 
-    def torque(name, mask=running):
-        return running_fault_torque_nm(FAULT[name], friction, theoretical, delivered,
-                                       direction, mask)
+    def torque(fault, mask=running):
+        fault = FAULT[fault] if isinstance(fault, str) else fault
+        return running_fault_torque_nm(fault, friction, theoretical, delivered, direction,
+                                       mask)
 
     expected = {'valve_plate_x1.4': 0.04, 'valve_plate_ramp_1.6': 0.06,  # at its full size
                 'valve_plate_intermittent_1.8': 0.08, 'bearing_x2.0': 0.05, 'joints_x3': 0.04,
-                'drive_loss_+0.2nm': 0.2, 'torque_offset_+0.2nm': 0.2,
+                'drive_loss_+0.2nm': (3 * 0.1 + 2 * 0.2) / 5, 'torque_offset_+0.2nm': 0.2,
                 'torque_constant_-5%': 0.5, 'pressure_gain_1.05': 0.4}
     for name, value in expected.items():
         assert torque(name) == pytest.approx(value, rel=1e-12), name
+    # several terms add with their signs: +0.3 offset, -0.4 from the pressure gain, and
+    # +-0.04 from the valve plate (motoring on samples 0, 2, 4): |-0.14|, |-0.06|, ...
+    compound = Fault('compound', 'not_friction', valve_plate=1.4, torque_offset_nm=0.3,
+                     pressure_gain=1.05)
+    assert torque(compound) == pytest.approx((3 * 0.14 + 2 * 0.06) / 5, rel=1e-12)
     assert math.isnan(torque('nominal'))
-    assert math.isnan(torque('bearing_x2.0', np.zeros(n, dtype=bool)))
+    assert torque('bearing_x2.0', np.zeros(n, dtype=bool)) == 0.0  # nothing runs: below k
+
+
+def test_a_classic_runs_fault_torque_is_the_tables_over_its_running_samples(table):
+    sim = simulate_scenario(scenario('trapezoid', 'valve_plate_x1.6', duration_s=40.0,
+                                     onset_s=10.0), table)
+    speed, accel = np.abs(sim.true_speed_rad_s), np.abs(sim.true_accel_rad_s2)
+    running = (sim.t_s >= 10.0) & (speed >= CONFIG.monitor_min_speed_rad_s) & \
+        (accel <= CONFIG.monitor_max_accel_rad_s2)
+    assert 0 < running.sum() < (sim.t_s >= 10.0).sum()  # the gate removes samples
+    vp = table.lookup_array(sim.true_speed_rad_s[running], sim.true_pressure_diff_pa[running],
+                            sim.true_viscosity_m2_s[running])['valve_plate_nm']
+    assert sim.fault_running_nm == pytest.approx(0.6 * np.mean(np.abs(vp)), rel=1e-9)
 
 
 @pytest.mark.parametrize('family', ['trapezoid', 'eha_pick_place'])
@@ -416,16 +439,35 @@ def test_a_runs_fault_torque_scales_with_the_fault_factor_minus_one(table, famil
                                         table).fault_running_nm)
 
 
+def test_a_classic_fault_that_only_the_realistic_families_simulate_is_refused(table):
+    for name in ('torque_constant_-5%', 'valve_plate_intermittent_1.8'):
+        with pytest.raises(ValueError, match='realistic families only'):
+            simulate_scenario(scenario('trapezoid', name), table)
+
+
+@pytest.mark.parametrize(('duration_s', 'onset_s', 'reason'), [
+    (120.0, 100.0, ''), (120.0, 5.0, 'learnt late'), (20.0, 5.0, 'never learnt')])
+def test_a_run_records_when_its_baseline_was_learnt_and_its_scope(duration_s, onset_s, reason):
+    run = run_scenario(scenario('trapezoid', 'valve_plate_x1.6', duration_s=duration_s,
+                                onset_s=onset_s, quiet=False))
+    assert scope_reason(run) == reason
+    assert (run.allowance_nm, run.warn_nm_s) == (CONFIG.cusum_drift_nm, CONFIG.cusum_warn_nm_s)
+    assert run.fault_running_nm > run.allowance_nm
+    if reason != 'never learnt':  # 30 s of monitored running at least, at 58 % of the time
+        assert CONFIG.baseline_learn_s < run.baseline_learnt_s < 100.0
+
+
 def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not():
     vp = {'family': 'eha_pick_place', 'fault': 'valve_plate_x1.4', 'allowance_nm': 0.025,
-          'warn_nm_s': 0.6}
+          'warn_nm_s': 0.6, 'baseline_learnt_s': 600.0}
     records = [
         record(**vp, fault_running_nm=0.05, first_alarm_s=1810.0, monitored_delay_s=10.0,
                attribution='valve_plate'),
         record(**vp, fault_running_nm=0.04, first_alarm_s=1830.0, monitored_delay_s=30.0,
                attribution='cannot_tell'),
-        record(**vp, fault_running_nm=0.025),  # at k: the CUSUM cannot move
-        record(**vp, fault_running_nm=0.5, baseline_at_onset=False),  # the fault in it
+        record(**vp, fault_running_nm=0.025),  # at k: the CUSUM's input is not above it
+        record(**{**vp, 'baseline_learnt_s': 1900.0}, fault_running_nm=0.5),  # the fault in it
+        record(**{**vp, 'baseline_learnt_s': math.inf}, fault_running_nm=0.3),  # no baseline
         record(family='eha_pick_place', fault='nominal', truth_class='nominal'),
         record(family='eha_pick_place', fault='bearing_x2.0', truth_class='other_friction',
                fault_running_nm=0.1, allowance_nm=0.025, first_alarm_s=1805.0,
@@ -434,9 +476,10 @@ def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not(
     floors = floor_figures(records)
     assert set(floors['faults']) == {'valve_plate_x1.4', 'bearing_x2.0'}
     cell = floors['faults']['valve_plate_x1.4']['eha_pick_place']
-    assert (cell['runs'], cell['in_scope'], cell['learnt_late'], cell['below_k']) == (4, 2, 1, 1)
+    assert (cell['runs'], cell['in_scope'], cell['never_learnt'], cell['learnt_late'],
+            cell['below_k']) == (5, 2, 1, 1, 1)
     assert cell['not_detected'] == 0 and cell['monitored_delay_p90_s'] == 30.0
-    # the earliest a CUSUM can warn: h / (dT - k), 0.6 / 0.025 and 0.6 / 0.015 s
+    # a CUSUM's running to WARN on a constant input: h / (dT - k), 0.6 / 0.025 and 0.015 s
     assert cell['least_delay_p90_s'] == pytest.approx(40.0)
     assert least_delay_s(records[0]) == pytest.approx(24.0)
     assert least_delay_s(records[2]) == math.inf and math.isnan(least_delay_s(record()))
@@ -444,8 +487,9 @@ def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not(
     assert (cell['fault_nm_min'], cell['fault_nm_max']) == (0.025, 0.5)
     bearing = floors['faults']['bearing_x2.0']['all']
     assert (bearing['named'], bearing['named_vp']) == (0, 1)
+    assert math.isnan(bearing['least_delay_p90_s'])  # h unknown: no reference
     text = format_floors(floors)
-    assert '2/4 (1 learnt late, 1 below k)' in text and '1/2 (1 ?)' in text
+    assert '2/5 (1 never learnt, 1 learnt late, 1 below k)' in text and '1/2 (1 ?)' in text
     assert '0.025-0.500' in text  # the fault's running torque over the runs
-    assert '30.0 [40.0]' in text
+    assert '30.0 [40.0]' in text and 'x1.4 <= 40 s' in text
     assert in_scope(record())  # written before the fields were kept: unknown, in scope

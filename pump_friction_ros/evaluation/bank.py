@@ -134,12 +134,11 @@ class RunRecord:
 
     monitored_delay_s: float  # monitored running from the onset to the first alarm; inf: none
     # the issue's floors hold "where the fault's torque exceeds the CUSUM allowance while
-    # running", on a baseline learnt before the fault (a fault commissioning saw is not a
-    # change); defaults: a record written before these were kept (unknown: in scope)
+    # running" (`floors`); defaults: a record written before these were kept (in scope)
     fault_running_nm: float = math.nan  # mean |torque the fault adds| running [N m]
     allowance_nm: float = math.nan  # the run's CUSUM allowance k [N m]
     warn_nm_s: float = math.nan  # the run's CUSUM WARN threshold h [N m s]
-    baseline_at_onset: bool = True  # the baseline was learnt at the onset
+    baseline_learnt_s: float = math.nan  # when the healthy baseline was learnt; inf: never
 
     @property
     def delay_s(self) -> float:
@@ -293,13 +292,13 @@ def prepare_true_tables(scenarios: list[Scenario]) -> int:
 
 
 def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
-          ) -> tuple[int, int | None, int, bool]:
+          ) -> tuple[int, int | None, int, int | None]:
     """
     Feed the signals in stamp order.
 
     Returns alarm entries before the onset, the first alarm's stamp, the monitored samples
-    between the onset and that alarm (or the end), and whether the healthy baseline was
-    learnt at the onset (at the end of a run without one).
+    between the onset and that alarm (or the end), and the stamp of the estimate with which
+    the healthy baseline was first learnt (None: never).
     """
     stamps = [np.round(x * 1e9).astype(np.int64)
               for x in (sim.temperature_t_s, sim.pressure_t_s, sim.t_s)]
@@ -314,7 +313,7 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
     previous, before, first, monitored = OK, 0, None, 0
     counts = core.counts
     at_onset = -1
-    learnt_at_onset = False
+    learnt: int | None = None
     for start in range(0, order.size, _CHUNK):
         part = order[start:start + _CHUNK]
         for ns, kind, value, tq in zip(stamp[part].tolist(), kinds[part].tolist(),
@@ -324,9 +323,10 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                 est = on_input(joint, ns, value, tq, ns)
                 if est is None:
                     continue
+                if learnt is None and baseline_learnt(core):
+                    learnt = ns
                 if at_onset < 0 and ns >= onset_ns:
                     at_onset = counts['monitor_samples']
-                    learnt_at_onset = baseline_learnt(core)
                 level = est.level  # the level the node publishes with this estimate
                 if level != previous:
                     if previous == OK and ns < onset_ns:
@@ -341,9 +341,7 @@ def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
                 on_input(temperature, ns, value, None, ns)
     if first is None:
         monitored = counts['monitor_samples'] - max(at_onset, 0)
-    if at_onset < 0:  # no onset (the nominal pump): learnt by the end
-        learnt_at_onset = baseline_learnt(core)
-    return before, first, monitored, learnt_at_onset
+    return before, first, monitored, learnt
 
 
 def run_scenario(scenario: Scenario) -> RunRecord:
@@ -386,7 +384,7 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         monitored_delay_s=math.inf if first is None else monitored * period_s,
         fault_running_nm=sim.fault_running_nm, allowance_nm=config.cusum_drift_nm,
         warn_nm_s=config.cusum_warn_nm_s,
-        baseline_at_onset=learnt)
+        baseline_learnt_s=math.inf if learnt is None else learnt / _NS)
 
 
 def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,

@@ -20,19 +20,24 @@ exceeds the CUSUM allowance while running". A fault run is **in scope** where
 
 * the torque the fault adds at its full size, averaged over the running samples after the
   onset (``RunRecord.fault_running_nm``, from the simulation's truth), exceeds the run's
-  CUSUM allowance k (``allowance_nm``): below it the CUSUM cannot accumulate, by design;
-* and the healthy baseline was learnt before the onset (``baseline_at_onset``): a fault
-  that commissioning saw is part of the healthy signature, not a change from it.
+  CUSUM allowance k (``allowance_nm``): at or below it a CUSUM's input does not exceed k on
+  average, by design (the issue's condition);
+* and the healthy baseline was learnt before the onset (``baseline_learnt_s``; this
+  module's condition, not the issue's: a fault that commissioning saw is part of the
+  healthy signature, not a change from it, and a baseline never learnt detects nothing).
 
 `floor_figures` counts, per fault and family, the runs in scope and the reason for each
-run out of it, and states the floors on the runs in scope:
+run out of it, and states the floors (`settings.FLOORS`) on the runs in scope:
 
-* the p90 of the monitored running to detection, beside the least a CUSUM needs,
-  h / (dT - k) (its sum grows by at most dT - k per second of running, dT the fault's
-  running torque, h the WARN threshold);
-* valve-plate faults named valve plate, and `cannot tell`;
-* other faults named valve plate, and a torque-constant change named a measurement change
-  (`not friction`).
+* the p90 of the monitored running from the onset to detection, beside a reference
+  figure, h / (dT - k): the running a CUSUM needs to reach its WARN threshold h on a
+  constant input dT, the fault's running torque (the monitor's sums run on the residual
+  projected on each cause's signature, with the baseline's margin taken off: a guide to
+  the order of magnitude, not a bound);
+* valve-plate faults named valve plate, and `cannot tell` (shares of the runs in scope,
+  an undetected run counting as not named);
+* other faults named valve plate, and each named as its class should be
+  (``settings.ACCEPTED_ATTRIBUTIONS``: a torque-constant change `not friction`).
 
 `format_floors` prints them as a Markdown table. A record without the fields (written
 before they were kept) counts as in scope.
@@ -45,7 +50,8 @@ import math
 from typing import Any
 
 from .bank import RunRecord
-from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS
+from .report import nearest_rank
+from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS, FLOORS
 
 __all__ = ['floor_figures', 'format_floors', 'in_scope', 'least_delay_s', 'scope_reason']
 
@@ -62,15 +68,19 @@ def scope_reason(record: RunRecord) -> str:
     Returns
     -------
     str
-        '' (in scope), 'nominal', 'learnt late' (the baseline was learnt after the onset)
-        or 'below k' (the fault's running torque is at or below the allowance).
+        '' (in scope), 'nominal', 'never learnt' (no healthy baseline by the end),
+        'learnt late' (the baseline was learnt after the onset: the fault is in it) or
+        'below k' (the fault's running torque is at or below the allowance). Unknown
+        fields (NaN) do not take a run out.
 
     """
     if record.truth_class == 'nominal':
         return 'nominal'
-    if not record.baseline_at_onset:
+    if record.baseline_learnt_s == math.inf:
+        return 'never learnt'
+    if record.baseline_learnt_s > record.onset_s:
         return 'learnt late'
-    if record.fault_running_nm <= record.allowance_nm:  # NaN (unknown): in scope
+    if record.fault_running_nm <= record.allowance_nm:
         return 'below k'
     return ''
 
@@ -82,12 +92,13 @@ def in_scope(record: RunRecord) -> bool:
 
 def least_delay_s(record: RunRecord) -> float:
     """
-    Return the least monitored running a CUSUM needs to reach WARN on a run's fault [s].
+    Return the running a CUSUM needs to reach WARN on a constant input of the fault [s].
 
-    Its sum grows by the fault's running torque dT less the allowance k per second of
-    running at most (all of dT seen by one sum, nothing taken off it), so it reaches the
-    WARN threshold h after h / (dT - k) at the earliest; inf where dT <= k, NaN where dT is
-    unknown. A floor below this on the mean is out of any CUSUM's reach with this k and h.
+    A sum fed dT - k per second of running, dT the fault's running torque and k the
+    allowance, reaches the WARN threshold h after h / (dT - k): a reference for the
+    detection delays (the monitor's sums run on the residual projected on each cause's
+    signature, less the baseline's margin; a fault above its mean in places is seen
+    sooner), not a bound.
 
     Parameters
     ----------
@@ -97,7 +108,7 @@ def least_delay_s(record: RunRecord) -> float:
     Returns
     -------
     float
-        h / (dT - k) [s].
+        h / (dT - k) [s]; inf where dT <= k, NaN where dT or h is unknown.
 
     """
     excess = record.fault_running_nm - record.allowance_nm
@@ -107,8 +118,7 @@ def least_delay_s(record: RunRecord) -> float:
 
 
 def _p90(values: list[float]) -> float:
-    ordered = sorted(values)
-    return ordered[max(math.ceil(0.9 * len(ordered)), 1) - 1] if ordered else math.nan
+    return nearest_rank([v for v in values if not math.isnan(v)], 90.0)
 
 
 def _order(names: set[str], reference: list[str]) -> list[str]:
@@ -128,13 +138,14 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     -------
     dict
         ``faults`` -> fault -> family (and 'all') -> dict with ``runs``, ``in_scope``,
-        ``learnt_late``, ``below_k``, ``not_detected`` (in scope), ``monitored_delay_p90_s``
-        (in scope; inf where more than a tenth were missed), ``least_delay_p90_s`` (the same
-        percentile of `least_delay_s`, in scope), ``named`` (in scope, named as
-        its class should be), ``named_vp`` (in scope, named valve plate), ``cannot_tell``
-        (in scope), ``fault_nm_min`` / ``fault_nm_max`` (the fault's running torque over
-        all the runs [N m]); ``classes`` -> fault -> its true class; ``families``: 'all'
-        and the families, in table order. Named: as ``settings.ACCEPTED_ATTRIBUTIONS``
+        ``never_learnt``, ``learnt_late``, ``below_k``, ``not_detected`` (in scope),
+        ``monitored_delay_p90_s`` (in scope; inf where more than a tenth were missed),
+        ``least_delay_p90_s`` (the same percentile of `least_delay_s`, in scope, where
+        known), ``named`` (in scope, named as its class should be), ``named_vp`` (in
+        scope, named valve plate), ``cannot_tell`` (in scope), ``fault_nm_min`` /
+        ``fault_nm_max`` (the fault's running torque over all the runs [N m]);
+        ``classes`` -> fault -> its true class; ``families``: 'all' and the families, in
+        table order. Named: as ``settings.ACCEPTED_ATTRIBUTIONS``
         accepts for the fault's class.
 
     """
@@ -156,6 +167,7 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
             right = ACCEPTED_ATTRIBUTIONS[mine[0].truth_class]
             out['faults'][name][family] = {
                 'runs': len(mine), 'in_scope': len(scoped),
+                'never_learnt': reasons.count('never learnt'),
                 'learnt_late': reasons.count('learnt late'),
                 'below_k': reasons.count('below k'),
                 'not_detected': sum(not math.isfinite(r.first_alarm_s) for r in scoped),
@@ -172,7 +184,8 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
 
 def _cell(c: dict[str, Any], kind: str) -> str:
     if kind == 'scope':
-        why = [f'{c[k]} {k.replace("_", " ")}' for k in ('learnt_late', 'below_k') if c[k]]
+        reasons = ('never_learnt', 'learnt_late', 'below_k')
+        why = [f'{c[k]} {k.replace("_", " ")}' for k in reasons if c[k]]
         return f'{c["in_scope"]}/{c["runs"]}' + (f' ({", ".join(why)})' if why else '')
     if kind == 'torque':
         low, high = c['fault_nm_min'], c['fault_nm_max']
@@ -232,15 +245,18 @@ def format_floors(floors: dict[str, Any]) -> str:
     def line(cells: list[str]) -> str:
         return '| ' + ' | '.join(c.ljust(w) for c, w in zip(cells, widths, strict=True)) + ' |'
 
-    legend = ('In scope (the issue\'s floors hold "where the fault\'s torque exceeds the '
-              'CUSUM allowance while running"): the torque the fault adds at its full size, '
-              'averaged over running after the onset, above the allowance k, and the '
-              'healthy baseline learnt before the onset. Out: "learnt late" (the baseline '
-              'completed after the onset: the fault is in it), "below k". mon p90: '
-              'monitored running from the onset to the first alarm (nearest rank); least: '
-              'the same percentile of h / (fault torque - k), the earliest a CUSUM reaches '
-              'WARN. '
-              'Floors: x1.8 <= 15 s, x1.4 <= 40 s; >= 90 % named vp, <= 10 % cannot tell; '
-              'no other fault named vp; torque constant named not friction.')
+    delays = ', '.join(f'{name} <= {value:g} s' for name, value in
+                       FLOORS.monitored_delay_p90_s)
+    legend = ('In scope: the torque the fault adds at its full size, averaged over running '
+              "after the onset, above the CUSUM allowance k (the issue's floors hold "
+              '"where the fault\'s torque exceeds the CUSUM allowance while running"), and '
+              'the healthy baseline learnt before the onset (ours: a fault commissioning saw '
+              'is in the baseline). Out: "never learnt", "learnt late", "below k". mon p90: '
+              'monitored running from the onset to the first alarm (nearest rank); in '
+              "square brackets the same percentile of h / (fault torque - k), a CUSUM's "
+              'running to WARN on a constant input (a reference, not a bound). Named: of '
+              f'the runs in scope, undetected ones not named. Floors: {delays}; '
+              f'>= {FLOORS.named:.0%} named vp, <= {FLOORS.cannot_tell:.0%} cannot tell; no '
+              'other fault named vp; each other fault named as its class.')
     return '\n'.join([line(head), '|' + '|'.join('-' * (w + 2) for w in widths) + '|',
                       *(line(r) for r in rows), '', legend])

@@ -45,7 +45,6 @@ from pathlib import Path
 from typing import Any
 
 from .bank import BankResult, RunRecord
-from .floors import floor_figures, format_floors
 from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
 from ..core.friction_bias import Z95  # the monitor's: its intervals are judged by their own
 
@@ -239,6 +238,8 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     fig['coverage_other'] = {
         f: _fraction([covers(r.other_scale, r.other_truth, r.other_std) for r in runs])
         for f, runs in other.items()}
+    from .floors import floor_figures  # (it reads the records with `nearest_rank`)
+
     fig['floors'] = floor_figures(records)
     return fig
 
@@ -340,6 +341,8 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
                    f'({figures["nominal_hours"]["all"]:.2f} h nominal), '
                    f'{result.runtime_s:.0f} s on {result.workers} worker(s) '
                    f'({result.cpu_s:.0f} s CPU).')
+    from .floors import format_floors
+
     floors = format_floors(figures['floors']) if 'floors' in figures else ''
     if floors:
         out += ['', floors]

@@ -305,11 +305,13 @@ def running_fault_torque_nm(fault: Fault, friction_nm: dict[str, np.ndarray],
 
     What the issue's floors are conditioned on ("where the fault's torque exceeds the
     CUSUM allowance while running"): the mean over the running samples of |dT|, with dT
-    what the fault moves measured minus modelled torque by at its full size (the end of a
-    ramp, an intermittent fault's on episodes): (f_c - 1) T_c per friction component,
-    the extra drive loss times the direction of rotation, the torque offset, (g - 1) times
-    the delivered torque for a torque-constant change g, and -(g - 1) T_th for a pressure
-    gain g (the model's theoretical torque moves with the measured pressure).
+    what the fault moves measured minus modelled torque by at its full size (a ramp's end
+    value: the bank's ramps end inside the run; an intermittent fault's on episodes):
+    (f_c - 1) T_c per friction component, the extra drive loss times the direction of
+    rotation, the torque offset, (g - 1) times the delivered torque for a torque-constant
+    change g (the drive's own gain error of a few % left out), and, to first order,
+    -(g - 1) T_th for a pressure gain g (the model's theoretical torque follows the
+    measured pressure; its pressure-dependent friction moves too, ~2 % of that).
 
     Parameters
     ----------
@@ -326,11 +328,13 @@ def running_fault_torque_nm(fault: Fault, friction_nm: dict[str, np.ndarray],
     Returns
     -------
     float
-        The mean [N m]; NaN for the nominal pump or where nothing runs.
+        The mean [N m]; NaN for the nominal pump, 0 where nothing runs after the onset.
 
     """
-    if fault.truth_class == 'nominal' or not running.any():
+    if fault.truth_class == 'nominal':
         return math.nan
+    if not running.any():
+        return 0.0
     added = np.zeros(int(np.count_nonzero(running)))
     for c, factor in fault.factors.items():
         if factor != 1.0:
@@ -368,6 +372,9 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
 
         return simulate_eha(scenario, table)
     fam, fault, sig = scenario.family, scenario.fault, scenario.family.signals
+    if fault.torque_gain != 1.0 or fault.intermittent:
+        raise ValueError(f'fault {fault.name!r}: a torque-constant change and intermittent '
+                         'faults are simulated on the realistic families only')
     config = scenario.config
     rng = np.random.default_rng(scenario.seed_key)
     duration, onset = scenario.duration_s, scenario.onset_s
