@@ -39,7 +39,7 @@ from pump_friction_ros.evaluation.floors import (
     floor_figures,
     format_floors,
     in_scope,
-    least_delay_s,
+    reference_delay_s,
     scope_reason,
 )
 from pump_friction_ros.evaluation.report import (
@@ -480,14 +480,14 @@ def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not(
             cell['below_k']) == (5, 2, 1, 1, 1)
     assert cell['not_detected'] == 0 and cell['monitored_delay_p90_s'] == 30.0
     # a CUSUM's running to WARN on a constant input: h / (dT - k), 0.6 / 0.025 and 0.015 s
-    assert cell['least_delay_p90_s'] == pytest.approx(40.0)
-    assert least_delay_s(records[0]) == pytest.approx(24.0)
-    assert least_delay_s(records[2]) == math.inf and math.isnan(least_delay_s(record()))
+    assert cell['reference_delay_p90_s'] == pytest.approx(40.0)
+    assert reference_delay_s(records[0]) == pytest.approx(24.0)
+    assert reference_delay_s(records[2]) == math.inf and math.isnan(reference_delay_s(record()))
     assert (cell['named'], cell['cannot_tell']) == (1, 1)
     assert (cell['fault_nm_min'], cell['fault_nm_max']) == (0.025, 0.5)
     bearing = floors['faults']['bearing_x2.0']['all']
     assert (bearing['named'], bearing['named_vp']) == (0, 1)
-    assert math.isnan(bearing['least_delay_p90_s'])  # h unknown: no reference
+    assert math.isnan(bearing['reference_delay_p90_s'])  # h unknown: no reference
     text = format_floors(floors)
     assert '2/5 (1 never learnt, 1 learnt late, 1 below k)' in text and '1/2 (1 ?)' in text
     assert '0.025-0.500' in text  # the fault's running torque over the runs

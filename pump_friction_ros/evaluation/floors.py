@@ -53,7 +53,7 @@ from .bank import RunRecord
 from .report import nearest_rank
 from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS, FLOORS
 
-__all__ = ['floor_figures', 'format_floors', 'in_scope', 'least_delay_s', 'scope_reason']
+__all__ = ['floor_figures', 'format_floors', 'in_scope', 'reference_delay_s', 'scope_reason']
 
 
 def scope_reason(record: RunRecord) -> str:
@@ -90,7 +90,7 @@ def in_scope(record: RunRecord) -> bool:
     return scope_reason(record) == ''
 
 
-def least_delay_s(record: RunRecord) -> float:
+def reference_delay_s(record: RunRecord) -> float:
     """
     Return the running a CUSUM needs to reach WARN on a constant input of the fault [s].
 
@@ -140,7 +140,7 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
         ``faults`` -> fault -> family (and 'all') -> dict with ``runs``, ``in_scope``,
         ``never_learnt``, ``learnt_late``, ``below_k``, ``not_detected`` (in scope),
         ``monitored_delay_p90_s`` (in scope; inf where more than a tenth were missed),
-        ``least_delay_p90_s`` (the same percentile of `least_delay_s`, in scope, where
+        ``reference_delay_p90_s`` (the same percentile of `reference_delay_s`, in scope, where
         known), ``named`` (in scope, named as its class should be), ``named_vp`` (in
         scope, named valve plate), ``cannot_tell`` (in scope), ``fault_nm_min`` /
         ``fault_nm_max`` (the fault's running torque over all the runs [N m]);
@@ -172,7 +172,7 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
                 'below_k': reasons.count('below k'),
                 'not_detected': sum(not math.isfinite(r.first_alarm_s) for r in scoped),
                 'monitored_delay_p90_s': _p90([r.monitored_delay_s for r in scoped]),
-                'least_delay_p90_s': _p90([least_delay_s(r) for r in scoped]),
+                'reference_delay_p90_s': _p90([reference_delay_s(r) for r in scoped]),
                 'named': sum(r.attribution in right for r in scoped),
                 'named_vp': sum(r.attribution == 'valve_plate' for r in scoped),
                 'cannot_tell': sum(r.attribution == 'cannot_tell' for r in scoped),
@@ -193,10 +193,10 @@ def _cell(c: dict[str, Any], kind: str) -> str:
     if not c['in_scope']:
         return '-'
     if kind == 'delay':
-        p90, least = c['monitored_delay_p90_s'], c['least_delay_p90_s']
+        p90, reference = c['monitored_delay_p90_s'], c['reference_delay_p90_s']
         text = 'nd' if math.isinf(p90) else f'{p90:.1f}'
         text += f' ({c["not_detected"]} nd)' if c['not_detected'] else ''
-        return text + ('' if math.isnan(least) else f' [{least:.1f}]')
+        return text + ('' if math.isnan(reference) else f' [{reference:.1f}]')
     if kind == 'named':
         text = f'{c["named"]}/{c["in_scope"]}'
         return text + (f' ({c["cannot_tell"]} ?)' if c['cannot_tell'] else '')
@@ -234,7 +234,7 @@ def format_floors(floors: dict[str, Any]) -> str:
     for name, per_family in table.items():
         rows.append(_row(per_family, families, name, 'in scope of runs', 'scope'))
         rows.append(_row(per_family, families, '', 'fault torque running, N m', 'torque'))
-        rows.append(_row(per_family, families, '', 'mon p90 s (nd) [least]', 'delay'))
+        rows.append(_row(per_family, families, '', 'mon p90 s (nd) [h/(dT-k)]', 'delay'))
         if floors['classes'][name] == 'valve_plate':
             rows.append(_row(per_family, families, '', 'named vp (? cannot tell)', 'named'))
         else:
