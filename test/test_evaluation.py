@@ -47,6 +47,7 @@ from pump_friction_ros.evaluation.report import (
     covers,
     format_table,
     nearest_rank,
+    table_order,
     write_outputs,
 )
 from pump_friction_ros.evaluation.scenarios import (
@@ -198,6 +199,12 @@ def test_nearest_rank_percentiles_by_hand():
     assert nearest_rank([10, 20, 30, 40, math.inf], 90) == math.inf  # ceil(4.5) = 5th
     assert nearest_rank(range(1, 11), 90) == 9 and nearest_rank(range(1, 11), 50) == 5
     assert math.isnan(nearest_rank([], 50))
+
+
+def test_table_order_lists_referenced_names_first_then_the_rest_sorted():
+    names = ['zeta', 'b', 'alpha', 'b', 'a']
+    assert table_order(names, ['b', 'c', 'a']) == ['b', 'a', 'alpha', 'zeta']
+    assert table_order(iter(names), []) == ['a', 'alpha', 'b', 'zeta']
 
 
 def test_false_alarm_rates_delays_confusion_and_coverage_by_hand():

@@ -50,7 +50,7 @@ import math
 from typing import Any
 
 from .bank import RunRecord
-from .report import nearest_rank
+from .report import nearest_rank, table_order
 from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS, FLOORS
 
 __all__ = ['floor_figures', 'format_floors', 'in_scope', 'reference_delay_s', 'scope_reason']
@@ -121,10 +121,6 @@ def _p90(values: list[float]) -> float:
     return nearest_rank([v for v in values if not math.isnan(v)], 90.0)
 
 
-def _order(names: set[str], reference: list[str]) -> list[str]:
-    return [n for n in reference if n in names] + sorted(names - set(reference))
-
-
 def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     """
     Reduce a bank's fault runs to the floors on the runs in scope.
@@ -150,8 +146,8 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
 
     """
     faults = [r for r in records if r.truth_class != 'nominal']
-    families = _order({r.family for r in faults}, [f.name for f in FAMILIES])
-    names = _order({r.fault for r in faults}, [f.name for f in FAULTS])
+    families = table_order({r.family for r in faults}, [f.name for f in FAMILIES])
+    names = table_order({r.fault for r in faults}, [f.name for f in FAULTS])
     out: dict[str, Any] = {'faults': {}, 'classes': {}, 'families': ['all', *families]}
     for name in names:
         runs = [r for r in faults if r.fault == name]

@@ -77,7 +77,23 @@ def nearest_rank(values: Iterable[float], q: float) -> float:
     return ordered[max(math.ceil(q / 100.0 * len(ordered)), 1) - 1]
 
 
-def _order(names: Iterable[str], reference: Sequence[str]) -> list[str]:
+def table_order(names: Iterable[str], reference: Sequence[str]) -> list[str]:
+    """
+    Order names as the table lists them: those in `reference` first, in its order.
+
+    Parameters
+    ----------
+    names : iterable of str
+        The names present (repeats allowed).
+    reference : sequence of str
+        The table's order (families, faults or classes as the settings list them).
+
+    Returns
+    -------
+    list of str
+        Each name once: the referenced ones in `reference` order, then the others sorted.
+
+    """
     present = set(names)
     return [n for n in reference if n in present] + sorted(present - set(reference))
 
@@ -169,9 +185,9 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
 
     """
     records = list(records)
-    families = _order((r.family for r in records), [f.name for f in FAMILIES])
-    faults = _order((r.fault for r in records), [f.name for f in FAULTS])
-    classes = _order((r.truth_class for r in records), list(ACCEPTED_ATTRIBUTIONS))
+    families = table_order((r.family for r in records), [f.name for f in FAMILIES])
+    faults = table_order((r.fault for r in records), [f.name for f in FAULTS])
+    classes = table_order((r.truth_class for r in records), list(ACCEPTED_ATTRIBUTIONS))
     nominal = _alarm_figures(records, families, nominal=True)
     pre = _alarm_figures(records, families, nominal=False)
     fig: dict[str, Any] = {
