@@ -68,6 +68,7 @@ import math
 import numpy as np
 
 from .baseline import Baseline, read_sums
+from .change_episodes import ChangeEpisodes
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
@@ -114,6 +115,7 @@ class AttributionSettings:
     attribution_z: float
     identifiability_correlation: float
     isolation_memory_s: float
+    isolation_episode_lack_of_fit: float
     scale_systematic_std: float
 
 
@@ -157,6 +159,20 @@ def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, f
     return change - half, change + half
 
 
+def _evidence(stats: ChangeStats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return T_j, delta_j and its std on these sums (`FaultIsolation.evidence`)."""
+    gjj = np.diag(stats.g)
+    ok = gjj > 0.0
+    safe = np.where(ok, gjj, 1.0)
+    t = stats.glr()
+    # an F-test rather than a chi-square: the noise scaled by how badly even the best
+    # single cause fits (systematic model error is not white noise)
+    inflation = stats.lack_of_fit()
+    delta = np.where(ok, stats.b / safe, math.nan)
+    std = np.where(ok, np.sqrt(inflation / safe), math.nan)
+    return t / inflation, delta, std
+
+
 class FaultIsolation:
     """
     GLR of the single causes on the windows since the change.
@@ -165,7 +181,7 @@ class FaultIsolation:
     ----------
     settings : AttributionSettings
         ``attribution_z``, ``identifiability_correlation``, ``isolation_memory_s``,
-        ``scale_systematic_std``.
+        ``isolation_episode_lack_of_fit``, ``scale_systematic_std``.
     viscosity_assumed : bool
         The viscosity is a parameter (no temperature topic): a friction change may be the
         oil's.
@@ -176,12 +192,15 @@ class FaultIsolation:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
         self.stats = ChangeStats(_N)
+        # the windows that show the change: one that comes and goes (change_episodes)
+        self.episodes = ChangeEpisodes(_N, settings.isolation_episode_lack_of_fit)
         self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
         self.bias = FrictionBias()  # what the baseline mispredicted before the change
 
     def reset(self) -> None:
         """Forget every window."""
         self.stats.clear()
+        self.episodes.clear()
         self.drift.reset()
         self.bias.reset()
 
@@ -217,12 +236,19 @@ class FaultIsolation:
         self.bias.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
         if not changing:
             self.stats.clear()
+            self.episodes.clear()
             return
         self.stats.add(s, d_nm, weight, keep, duration_s, oil_nm)
+        self.episodes.add(self.stats, s, d_nm, weight, keep, duration_s)
 
-    def evidence(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evidence(self, shown: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """
         Return the GLR statistic, the change and its std of each cause since the change.
+
+        Parameters
+        ----------
+        shown : bool
+            On the windows that show the change only (``change_episodes``), not every one.
 
         Returns
         -------
@@ -232,17 +258,20 @@ class FaultIsolation:
             fit of the best single cause, so that model error does not pass for evidence.
 
         """
-        stats = self.stats
-        gjj = np.diag(stats.g)
-        ok = gjj > 0.0
-        safe = np.where(ok, gjj, 1.0)
-        t = stats.glr()
-        # an F-test rather than a chi-square: the noise scaled by how badly even the best
-        # single cause fits (systematic model error is not white noise)
-        inflation = stats.lack_of_fit()
-        delta = np.where(ok, stats.b / safe, math.nan)
-        std = np.where(ok, np.sqrt(inflation / safe), math.nan)
-        return t / inflation, delta, std
+        return _evidence(self.episodes.on if shown else self.stats)
+
+    def comes_and_goes(self) -> bool:
+        """
+        Return whether the change comes and goes (``change_episodes``).
+
+        Returns
+        -------
+        bool
+            The windows that show the change fit ``isolation_episode_lack_of_fit`` times
+            better than every window, whose fit leaves at least that times the noise.
+
+        """
+        return bool(self.stats.windows) and self.episodes.applies(self.stats)
 
     def friction_change(self, j: int) -> tuple[float, float]:
         """
@@ -293,7 +322,11 @@ class FaultIsolation:
         stats = self.stats
         if not stats.windows:
             return Verdict.NONE, 'no change from the baseline', -1
-        t, delta, _ = self.evidence()
+        # a change that comes and goes: read on the windows that show it (change_episodes)
+        episodic = self.comes_and_goes()
+        if episodic:
+            stats = self.episodes.on
+        t, delta, _ = self.evidence(episodic)
         z2 = self.settings.attribution_z ** 2
         order = [int(i) for i in np.argsort(-np.nan_to_num(t, nan=-1.0))]
         j, k = order[0], order[1]
@@ -306,7 +339,7 @@ class FaultIsolation:
         if close and _CLASS[j] == _CLASS[k] == Verdict.NOT_FRICTION:
             return (Verdict.NOT_FRICTION, f'not friction: {_WORDS[CAUSES[j]]} or '
                     f'{_WORDS[CAUSES[k]]}', j)
-        if j in (_VP, _OTHER) and (not close or k in (_VP, _OTHER)):
+        if not episodic and j in (_VP, _OTHER) and (not close or k in (_VP, _OTHER)):
             # friction: which one is told with a k_t drift too small to be learnt profiled
             # out, as its size is (the same as above where the drift carries nothing)
             choice = choose_friction(stats, self.drift, self.bias, t)
@@ -331,9 +364,15 @@ class FaultIsolation:
             return _CLASS[j], f'not friction: {_WORDS[CAUSES[j]]} {delta[j]:+.3g}' + (
                 ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else ''), j
         scale = f'scale {1.0 + self.friction_change(j)[0]:.2f} of healthy'
-        line = self.moving(j)
-        if line is not None:
-            scale += f', {1.0 + line[0]:.2f} now and {"rising" if line[2] < 0.0 else "falling"}'
+        if episodic:  # a line through on and off means nothing: its size while it shows
+            share = self.episodes.fraction(self.stats)
+            scale += (f', {1.0 + delta[j]:.2f} while it shows: it comes and goes, in '
+                      f'{100.0 * share:.0f} % of the running since the change')
+        else:
+            line = self.moving(j)
+            if line is not None:
+                scale += (f', {1.0 + line[0]:.2f} now and '
+                          f'{"rising" if line[2] < 0.0 else "falling"}')
         if j == _VP:
             name = f'valve plate ({scale})'
             if self.viscosity_assumed:
@@ -435,7 +474,8 @@ class FaultIsolation:
         return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
                 'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
                 'b1': st.b1.tolist(), 'bv': st.bv.tolist(), 'bv1': st.bv1.tolist(),
-                'drift': self.drift.state(), 'bias': self.bias.state()}
+                'drift': self.drift.state(), 'bias': self.bias.state(),
+                'episodes': self.episodes.state()}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -473,7 +513,10 @@ class FaultIsolation:
         else:
             bias.usable = not windows
         bias.prior_precision = self.bias.prior_precision  # the monitor's
+        episodes = ChangeEpisodes(_N, self.episodes.ratio)
+        if 'episodes' in state:  # else (a file from before them) from the next window on
+            episodes.load(state['episodes'])  # type: ignore[arg-type]
         st = self.stats  # all read: replaced together
         st.g, st.b, st.c, st.count, st.windows = g, b, c, count, windows
         st.g1, st.g2, st.b1, st.bv, st.bv1 = g1, g2, b1, bv, bv1
-        self.drift, self.bias = drift, bias
+        self.drift, self.bias, self.episodes = drift, bias, episodes

@@ -88,18 +88,37 @@ class ChangeStats:
             none, the viscosity measured or no band) [N m].
 
         """
+        self.age(keep, age_s)
+        self.bv += w * oil_nm * s
+        self.g += w * np.outer(s, s)
+        self.b += w * d * s
+        self.c += w * d * d
+        self.count += 1.0
+        self.windows += 1
+
+    def age(self, keep: float, age_s: float) -> None:
+        """
+        Age the windows by one that is not added: its running passes, it is not a window.
+
+        Parameters
+        ----------
+        keep : float
+            exp(-duration / isolation_memory_s) [-].
+        age_s : float
+            Its monitored running [s].
+
+        """
         # the older windows age by the new one's running: tau -> tau + age_s
         g0 = np.diag(self.g)
         self.g2 = keep * (self.g2 + 2.0 * age_s * self.g1 + age_s * age_s * g0)
         self.g1 = keep * (self.g1 + age_s * g0)
         self.b1 = keep * (self.b1 + age_s * self.b)
         self.bv1 = keep * (self.bv1 + age_s * self.bv)
-        self.bv = keep * self.bv + w * oil_nm * s
-        self.g = keep * self.g + w * np.outer(s, s)
-        self.b = keep * self.b + w * d * s
-        self.c = keep * self.c + w * d * d
-        self.count = keep * self.count + 1.0
-        self.windows += 1
+        self.bv = keep * self.bv
+        self.g = keep * self.g
+        self.b = keep * self.b
+        self.c = keep * self.c
+        self.count = keep * self.count
 
     def trend(self, j: int, drift: tuple[float, ...] = ()) -> tuple[float, float, float] | None:
         """
