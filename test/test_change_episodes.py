@@ -72,7 +72,7 @@ def _isolation(windows, ratio=None):
 
 @pytest.mark.parametrize('seed', range(4))
 def test_the_windows_taken_as_showing_the_change_are_its_episodes(seed):
-    every, episodes = ChangeStats(6), ChangeEpisodes(6, 4.0)
+    every, episodes = ChangeStats(6), ChangeEpisodes(6, 4.0, 3.0)
     told, truth = [], []
     for s, d, shows in _windows(seed, VP, True):
         every.add(s, d, NOISE_NM ** -2, KEEP, DURATION_S)
@@ -82,7 +82,28 @@ def test_the_windows_taken_as_showing_the_change_are_its_episodes(seed):
     # their fit: the change while it shows (0.8), within the noise (lack of fit ~1)
     assert episodes.on.b[VP] / episodes.on.g[VP, VP] == pytest.approx(0.8, abs=0.02)
     assert episodes.on.lack_of_fit() < 1.5 < 4.0 * 4.0 < every.lack_of_fit()
-    assert episodes.applies(every)
+    assert episodes.runs_z(every) < -10.0 and episodes.applies(every)
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_the_runs_z_score_is_wald_and_wolfowitz_s_on_unforgotten_windows(seed):
+    rng = np.random.default_rng(seed)
+    blocks = seed % 2 == 1  # runs of 30-60 windows, else independent windows
+    shown = (np.repeat(rng.random(40) < 0.4, rng.integers(30, 60, 40)) if blocks
+             else rng.random(1500) < 0.3)
+    every, episodes = ChangeStats(6), ChangeEpisodes(6, 4.0, 3.0)
+    s = np.array([1.0, 0.5, 0.0, 0.0, 0.0, 0.0])
+    for on in shown:
+        d = 1.0 if on else 0.0
+        every.add(s, d, 1.0, 1.0, DURATION_S)  # keep 1: nothing forgotten, plain counts
+        episodes.add(every, s, d, 1.0, 1.0, DURATION_S)
+    n1, n = shown.sum(), shown.size
+    n2, runs = n - n1, 1 + np.count_nonzero(np.diff(shown.astype(int)))
+    mean = 2.0 * n1 * n2 / n + 1.0
+    var = 2.0 * n1 * n2 * (2.0 * n1 * n2 - n) / (n * n * (n - 1.0))
+    assert episodes.on.count == n1
+    assert episodes.runs_z(every) == pytest.approx((runs - mean) / math.sqrt(var), rel=1e-9)
+    assert (episodes.runs_z(every) < -10.0) if blocks else (abs(episodes.runs_z(every)) < 3.5)
 
 
 @pytest.mark.parametrize('seed', range(4))
@@ -129,6 +150,21 @@ def test_ageing_adds_the_running_but_not_a_window():
     assert (aged.windows, padded.windows) == (2, 3)
 
 
+@pytest.mark.parametrize('seed', range(4))
+@pytest.mark.parametrize('truth', [VP, OTHER])
+def test_windows_a_drift_picks_one_by_one_are_not_a_change_that_comes_and_goes(seed, truth):
+    # a step with a torque-constant drift the single causes do not fit (lack of fit 4-7):
+    # some windows fit one cause alone, scattered (test_friction_bias's windows)
+    from test.test_friction_bias import _windows as drifting
+
+    isolation = _isolation([(s, d, changing) for s, _, d, changing in
+                            drifting(20 + seed, truth, (0.0, 0.0), drift_per_k=-0.3e-3)
+                            if changing])
+    assert isolation.stats.lack_of_fit() > 4.0
+    assert abs(isolation.episodes.runs_z(isolation.stats)) < 3.0
+    assert not isolation.comes_and_goes()
+
+
 def test_the_episodes_survive_a_restart_and_an_older_state_loads_without_them():
     windows = list(_windows(5, VP, True, windows=1600))
     isolation = _isolation(windows)
@@ -141,7 +177,8 @@ def test_the_episodes_survive_a_restart_and_an_older_state_loads_without_them():
     assert again.episodes.on.windows == 0 and not again.comes_and_goes()
 
 
-@pytest.mark.parametrize('bad', [{'g': [[0.0]]}, {'c': -1.0}, {'b1': [math.nan] * 6}])
+@pytest.mark.parametrize('bad', [{'g': [[0.0]]}, {'c': -1.0}, {'b1': [math.nan] * 6},
+                                 {'switches': -2.0}, {'last': 'yes'}])
 def test_malformed_episode_sums_are_refused(bad):
     isolation = _isolation(list(_windows(5, VP, True, windows=600)))
     state = isolation.state()

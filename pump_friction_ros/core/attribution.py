@@ -193,7 +193,8 @@ class FaultIsolation:
         self.viscosity_assumed = viscosity_assumed
         self.stats = ChangeStats(_N)
         # the windows that show the change: one that comes and goes (change_episodes)
-        self.episodes = ChangeEpisodes(_N, settings.isolation_episode_lack_of_fit)
+        self.episodes = ChangeEpisodes(_N, settings.isolation_episode_lack_of_fit,
+                                       settings.attribution_z)
         self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
         self.bias = FrictionBias()  # what the baseline mispredicted before the change
 
@@ -513,7 +514,7 @@ class FaultIsolation:
         else:
             bias.usable = not windows
         bias.prior_precision = self.bias.prior_precision  # the monitor's
-        episodes = ChangeEpisodes(_N, self.episodes.ratio)
+        episodes = ChangeEpisodes(_N, self.episodes.ratio, self.episodes.z)
         if 'episodes' in state:  # else (a file from before them) from the next window on
             episodes.load(state['episodes'])  # type: ignore[arg-type]
         st = self.stats  # all read: replaced together

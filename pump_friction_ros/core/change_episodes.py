@@ -24,19 +24,30 @@ divides every cause's T by it. Two frictions whose signatures correlate 0.97-0.9
 told apart by a lead of a few units where z^2 = 9 is needed. Measured on the bank's
 intermittent valve-plate faults (x1.8 in episodes of 20-90 s, off 20-180 s; pick and place
 and steps, seeds 0 and 1, 11 runs): lack of fit 4-121, leads -1 to +24; on the windows where
-the change shows, lack of fit 1.0-3.4 and leads +13 to +3826, the valve plate's in all 11.
+the change shows, lack of fit 1.0-3.4 and leads +13 to +3826, the valve plate's in all 11,
+and the runs test's z -9 to -27.
 
 So the windows are split as a two-state change model would (on: delta s, off: no change;
 Basseville & Nikiforov 1993, sec. 7.2, a change with a nuisance on/off profile): a window
 shows the change where its residual is nearer delta s_j than 0, delta x s_j x d > (delta
 x s_j)^2 / 2, j the cause that leads on every window and delta its change on the windows
-that show it (on every window until some do). Those windows' sums (`episodes`) age with all
-the change's running, as every window's do. Where the best single cause's lack of fit on
-every window is at least ``isolation_episode_lack_of_fit`` and that many times its lack of
-fit on the windows that show the change, the change comes and goes and the verdict reads
-the latter (`ChangeEpisodes.applies`). A step, a ramp (its line, ``friction_choice``) or a
-drift fits every window to within model error (lack of fit 1.0-1.1 on the bank's x1.4
-steps), so they read every window as before.
+that show it (on every window until some do). Those windows' sums (`ChangeEpisodes.on`) age
+with all the change's running, as every window's do. The change comes and goes, and the
+verdict reads those windows (`ChangeEpisodes.applies`), where three things hold:
+
+- the best single cause's lack of fit on every window is at least
+  ``isolation_episode_lack_of_fit``, and that many times its lack of fit on the windows
+  that show the change: they fit, every window does not;
+- those windows come in runs: a runs test (Wald & Wolfowitz 1940) on the sequence of
+  windows that show it and windows that do not gives z <= -``attribution_z``. Episodes
+  switch a few times; a split that a nuisance makes window by window (a torque-constant
+  drift the single causes do not fit: a step with such a drift read a lack of fit of 4-7
+  and windows picked one by one that fitted a torque gain, z ~ 0) switches as often as
+  independent windows would.
+
+A step or a ramp fits every window to within model error or fails the runs test (the
+bank's realistic x1.4 and x1.8 steps: lack of fit 1.0-2.0; its ramps 2-11 on every window
+and on the windows that show them alike), so they read every window as before.
 
 The reported scales stay those of every window (the memory's mean, the truth an intermittent
 fault's estimate is held to, ``evaluation.eha_scenarios.memory_weighted_factor``); the
@@ -66,17 +77,23 @@ class ChangeEpisodes:
     lack_of_fit : float
         ``isolation_episode_lack_of_fit`` [-]: the ratio from which the change is taken as
         coming and going (> 1).
+    z : float
+        ``attribution_z`` [-]: the runs test's z score below -z says the windows that show
+        the change come in runs.
 
     """
 
-    def __init__(self, causes: int, lack_of_fit: float) -> None:
+    def __init__(self, causes: int, lack_of_fit: float, z: float) -> None:
         self._n = causes
         self.ratio = lack_of_fit
-        self.on = ChangeStats(causes)
+        self.z = z
+        self.clear()
 
     def clear(self) -> None:
         """Forget every window."""
-        self.on.clear()
+        self.on = ChangeStats(self._n)
+        self.switches = 0.0  # windows that differ from the one before, forgotten as the sums
+        self.last: bool | None = None  # whether the window before showed the change
 
     def add(self, every: ChangeStats, s: np.ndarray, d_nm: float, weight: float,
             keep: float, duration_s: float) -> bool:
@@ -105,19 +122,49 @@ class ChangeEpisodes:
 
         """
         t = every.glr()
-        if np.isnan(t).all():
-            self.on.age(keep, duration_s)
-            return False
-        j = int(np.nanargmax(t))
         on = self.on
-        source = on if on.g[j, j] > 0.0 else every
-        x = float(source.b[j] / source.g[j, j]) * float(s[j])  # delta s_j, this window
-        shows = x * d_nm > 0.5 * x * x
+        shows = False
+        if not np.isnan(t).all():
+            j = int(np.nanargmax(t))
+            source = on if on.g[j, j] > 0.0 else every
+            x = float(source.b[j] / source.g[j, j]) * float(s[j])  # delta s_j, this window
+            shows = x * d_nm > 0.5 * x * x
         if shows:
             on.add(s, d_nm, weight, keep, duration_s)
         else:
             on.age(keep, duration_s)
+        self.switches = keep * self.switches + float(self.last is not None and
+                                                     shows != self.last)
+        self.last = shows
         return shows
+
+    def runs_z(self, every: ChangeStats) -> float:
+        """
+        Return the runs test's z score of the windows that show the change and those not.
+
+        Wald & Wolfowitz (1940): of n windows, n_1 showing it, independent windows switch
+        R - 1 times with E[R] = 2 n_1 n_2 / n + 1 and var R = 2 n_1 n_2 (2 n_1 n_2 - n) /
+        (n^2 (n - 1)); episodes switch far less (z << 0), windows a nuisance picks one by
+        one (a drift, a load) as often (z ~ 0). The counts are the memory-weighted ones.
+
+        Parameters
+        ----------
+        every : ChangeStats
+            Every window's sums.
+
+        Returns
+        -------
+        float
+            (R - E[R]) / std R [-]; 0 where all windows or none show it.
+
+        """
+        n, n1 = every.count, self.on.count
+        n2 = n - n1
+        if not (n1 > 0.0 and n2 > 0.0 and n > 1.0):
+            return 0.0
+        pairs = 2.0 * n1 * n2
+        var = pairs * (pairs - n) / (n * n * (n - 1.0))
+        return (self.switches - pairs / n) / math.sqrt(var) if var > 0.0 else 0.0  # R - E[R]
 
     def applies(self, every: ChangeStats) -> bool:
         """
@@ -131,15 +178,16 @@ class ChangeEpisodes:
         Returns
         -------
         bool
-            The best single cause's lack of fit on every window is at least the ratio, and
-            the ratio times that on the windows that show the change (which number two at
-            least).
+            The windows that show the change (two at least) come in runs (`runs_z` <= -z),
+            and the best single cause's lack of fit on every window is at least the ratio,
+            and the ratio times that on those windows.
 
         """
         if self.on.count < 2.0:
             return False
         lack = every.lack_of_fit()
-        return lack >= self.ratio and lack >= self.ratio * self.on.lack_of_fit()
+        return lack >= self.ratio and lack >= self.ratio * self.on.lack_of_fit() and \
+            self.runs_z(every) <= -self.z
 
     def fraction(self, every: ChangeStats) -> float:
         """Return the share of the change's windows that show it, memory-weighted [-]."""
@@ -150,7 +198,7 @@ class ChangeEpisodes:
         on = self.on
         return {'g': on.g.tolist(), 'b': on.b.tolist(), 'c': on.c, 'count': on.count,
                 'windows': on.windows, 'g1': on.g1.tolist(), 'g2': on.g2.tolist(),
-                'b1': on.b1.tolist()}
+                'b1': on.b1.tolist(), 'switches': self.switches, 'last': self.last}
 
     def load(self, state: dict[str, object]) -> None:
         """
@@ -168,11 +216,14 @@ class ChangeEpisodes:
 
         """
         n = self._n
-        (g, b, g1, g2, b1), (c, count) = read_sums(
+        (g, b, g1, g2, b1), (c, count, switches) = read_sums(
             state, {'g': (n, n), 'b': (n,), 'g1': (n,), 'g2': (n,), 'b1': (n,)},
-            ('c', 'count'), 'isolation episodes')
+            ('c', 'count', 'switches'), 'isolation episodes')
         windows = int(state['windows'])  # type: ignore[call-overload]
+        last = state['last']
+        if last not in (None, True, False):
+            raise ValueError(f'isolation episodes: last {last!r}, not a boolean or null')
         on = ChangeStats(n)
         on.g, on.b, on.c, on.count, on.windows, on.g1, on.g2, on.b1 = \
             g, b, c, count, windows, g1, g2, b1
-        self.on = on
+        self.on, self.switches, self.last = on, switches, None if last is None else bool(last)
