@@ -268,8 +268,9 @@ class FaultIsolation:
         Returns
         -------
         bool
-            The windows that show the change fit ``isolation_episode_lack_of_fit`` times
-            better than every window, whose fit leaves at least that times the noise.
+            The windows that show the change come in runs (a runs test at
+            ``attribution_z``) and fit ``isolation_episode_lack_of_fit`` times better than
+            every window, whose fit leaves at least that times the noise.
 
         """
         return bool(self.stats.windows) and self.episodes.applies(self.stats)
@@ -361,14 +362,18 @@ class FaultIsolation:
         if close:
             return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[j]]} or {_WORDS[CAUSES[k]]}: not '
                     f'yet told apart (evidence {t[j]:.0f} against {t[k]:.0f})', -1)
+        episodes = ''
+        if episodic:
+            episodes = (f'it comes and goes, shown in {100.0 * self.episodes.fraction():.0f} '
+                        "% of the change's windows")
         if j not in (_VP, _OTHER):
-            return _CLASS[j], f'not friction: {_WORDS[CAUSES[j]]} {delta[j]:+.3g}' + (
-                ' N m' if CAUSES[j] in ('torque_offset', 'drive_loss') else ''), j
+            size = f'{delta[j]:+.3g}' + (' N m' if CAUSES[j] in ('torque_offset', 'drive_loss')
+                                         else '')
+            return _CLASS[j], f'not friction: {_WORDS[CAUSES[j]]} {size}' + (
+                f' while it shows ({episodes})' if episodic else ''), j
         scale = f'scale {1.0 + self.friction_change(j)[0]:.2f} of healthy'
         if episodic:  # a line through on and off means nothing: its size while it shows
-            share = self.episodes.fraction(self.stats)
-            scale += (f', {1.0 + delta[j]:.2f} while it shows: it comes and goes, in '
-                      f'{100.0 * share:.0f} % of the running since the change')
+            scale += f', {1.0 + delta[j]:.2f} while it shows: {episodes}'
         else:
             line = self.moving(j)
             if line is not None:

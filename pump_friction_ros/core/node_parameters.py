@@ -246,9 +246,10 @@ class EstimatorConfig:
         120.0, 'Memory of the isolation: older windows since the change weigh exp(-age / '
         'this) [s of monitored running].', 1.0, 1e7)
     isolation_episode_lack_of_fit: float = _param(
-        4.0, 'A change comes and goes where the best single cause leaves at least this times '
-        'the noise on every window since it and this times more than on the windows that '
-        'show it; the verdict then reads those (docs/monitor.md) [-].', 1.5, 1e6)
+        4.0, 'A change comes and goes where the best single cause fits every window since '
+        'it this many times worse than the windows that show it (lack of fit, x noise) and '
+        'those come in runs (runs test at attribution_z); the verdict then reads those '
+        '(docs/monitor.md) [-].', 1.5, 1e6)
     scale_systematic_std: float = _param(
         0.05, 'Floor of the standard deviation of a reported friction scale: model error '
         'that does not average away [-].', 0.0, 10.0)

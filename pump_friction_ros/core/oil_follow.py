@@ -99,12 +99,12 @@ def friction_fall(isolation: FaultIsolation) -> tuple[int, float]:
     -------
     tuple
         (index into `FOLLOWED`, change < 0: of a change still moving, the value its line
-        reaches now), or (-1, NaN) where the isolation names neither friction or its change
-        is not a fall.
+        reaches now), or (-1, NaN) where the isolation names neither friction, its change
+        is not a fall, or it comes and goes (an oil thins, it does not come and go).
 
     """
     j = isolation.verdict()[2]
-    if not 0 <= j < len(FOLLOWED):
+    if not 0 <= j < len(FOLLOWED) or isolation.comes_and_goes():
         return -1, math.nan
     line = isolation.moving(j)
     change = line[0] if line is not None else float(isolation.evidence()[1][j])
