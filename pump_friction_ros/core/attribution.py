@@ -73,8 +73,10 @@ from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
 from .friction_choice import choose_friction
+from .signatures import signature_matrix
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
+# (signature_matrix lives in signatures; it is the isolation's, exported here)
 
 CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torque_offset',
           'drive_loss')
@@ -117,40 +119,6 @@ class AttributionSettings:
     isolation_memory_s: float
     isolation_episode_lack_of_fit: float
     scale_systematic_std: float
-
-
-def signature_matrix(baseline: Baseline, drive_loss_nm: float,
-                     rotor_inertia_kg_m2: float) -> np.ndarray:
-    """
-    Return M such that the causes' signatures over a window are s = M h (`CAUSES` order).
-
-    h is the window's regressor vector (``baseline.baseline_regressors``: T_vp, T_o, 1, s,
-    T_th s, a s); every signature is linear in it.
-
-    Parameters
-    ----------
-    baseline : Baseline
-        The healthy signature (its friction levels, drive loss and inertia).
-    drive_loss_nm : float
-        The configured drive loss [N m].
-    rotor_inertia_kg_m2 : float
-        The configured rotor inertia [kg m^2]: a torque gain scales the measured J a too.
-
-    Returns
-    -------
-    ndarray, shape (6, 6)
-        M [N m per unit of delta_j, per unit of h].
-
-    """
-    b = baseline.coefficients
-    vp, other = 1.0 + b[0], 1.0 + b[1]
-    inertia = rotor_inertia_kg_m2 + b[5]
-    return np.array([[vp, 0.0, 0.0, 0.0, 0.0, 0.0],  # valve plate, healthy level
-                     [0.0, other, 0.0, 0.0, 0.0, 0.0],  # other friction, healthy level
-                     [vp, other, drive_loss_nm + b[2], 0.0, 1.0, inertia],  # measured torque
-                     [0.0, 0.0, 0.0, 0.0, -1.0, 0.0],  # pressure read too high
-                     [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],  # torque offset
-                     [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])  # drive loss
 
 
 def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
