@@ -292,8 +292,10 @@ class FaultIsolation:
         stats = self.stats
         if not stats.windows:
             return Verdict.NONE, 'no change from the baseline', -1
-        # a change that comes and goes: read on the windows that show it (change_episodes)
-        episodic = self.comes_and_goes()
+        # a change that comes and goes, read on the windows that show it (change_episodes)
+        # to tell which friction; a split naming none is not taken (test_friction_line)
+        episodic = self.comes_and_goes() and \
+            int(np.argmax(np.nan_to_num(self.evidence(True)[0], nan=-1.0))) in (_VP, _OTHER)
         if episodic:
             stats = self.episodes.on
         t, delta, _ = self.evidence(episodic)

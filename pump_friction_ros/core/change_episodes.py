@@ -45,7 +45,10 @@ verdict reads those windows (`ChangeEpisodes.applies`), where both hold:
   and windows picked one by one that fitted a torque gain, z ~ 0) switches as often as
   independent windows would.
 
-A step or a ramp fits every window as well as the windows that show it (the bank's
+The verdict takes the split only where those windows name a friction (``attribution``): it
+is there to tell which friction; a ramp of other friction with an unlearnt drift, split into
+its late windows (one run), fitted a torque gain there. A step or a ramp fits every window
+as well as the windows that show it (the bank's
 realistic steps, ramps, bearing and torque-constant faults of pick and place: lack of fit
 1.0-19.5 on both alike; their runs tests' z -5.9 to +0.4), so they read every window as
 before. The runs test is what keeps out a nuisance's split; the ratio, what keeps out a
