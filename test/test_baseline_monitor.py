@@ -374,3 +374,33 @@ def test_a_steady_pump_completes_its_commissioning_at_once_or_nearly():
             pytest.fail('a steady pump never completed its commissioning')
         restarts.append(com.restarts)
     assert max(restarts) <= 2 and sum(restarts) <= 4, restarts
+
+
+def test_the_change_start_dates_the_windows_the_isolation_holds_and_survives_a_restart():
+    mon = monitor()
+    rng = np.random.default_rng(21)
+    t = run(mon, rng, 240, TRUTH, noise=0.002)  # commissioning
+    t = run(mon, rng, 80, TRUTH, noise=0.002, t0=t)  # healthy: no CUSUM leaves zero
+    assert math.isnan(mon.change_start_s) and mon.isolation.stats.count == 0.0
+    onset, held = t, []
+    for _ in range(120):  # valve plate x1.8
+        t = run(mon, rng, 1, TRUTH, change=_changed('valve_plate', 0.8), noise=0.002, t0=t)
+        held.append((math.isfinite(mon.change_start_s), mon.isolation.stats.count > 0.0))
+    assert onset < mon.change_start_s <= mon.alarm_onset_s and mon.level >= WARN
+    # the scales describe the windows from the change's start: held exactly while it is
+    assert all(dated == holds for dated, holds in held)
+    state = mon.state_dict()
+    again = monitor()
+    again.load_state_dict(state)
+    assert again.change_start_s == mon.change_start_s
+    older = {key: value for key, value in state.items() if key != 'change_start_s'}
+    again.load_state_dict(older)  # a file written before the start was kept: not dated
+    assert math.isnan(again.change_start_s)
+    run(again, rng, 1, TRUTH, change=_changed('valve_plate', 0.8), noise=0.002, t0=t)
+    assert again.change_start_s > t  # dated from the first window after loading
+    for _ in range(1500):  # repaired: the CUSUMs drain (from the cap: ~940 windows)
+        t = run(mon, rng, 1, TRUTH, noise=0.002, t0=t)
+        if mon.cusum_pos_nm_s == mon.cusum_neg_nm_s == 0.0:
+            break
+    assert math.isnan(mon.change_start_s) and mon.isolation.stats.count == 0.0
+    assert mon.level == OK

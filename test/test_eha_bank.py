@@ -15,20 +15,29 @@
 """Realistic EHA families of the evaluation bank: closed loop, sensors, true pump, streams."""
 
 from dataclasses import replace
+from functools import partial
 import math
 
 import numpy as np
 from pump_friction_ros.core.estimator import TorqueEstimator
-from pump_friction_ros.evaluation.bank import _feed, base_config, build_scenarios
+from pump_friction_ros.core.monitor import OK, WARN
+from pump_friction_ros.evaluation.bank import (
+    _feed,
+    base_config,
+    build_scenarios,
+    MonitorReading,
+    valve_plate_truth,
+)
 from pump_friction_ros.evaluation.closed_loop import Plant, Setpoints, simulate_closed_loop
 from pump_friction_ros.evaluation.eha_scenarios import (
     draw_eha,
     eha_estimator_config,
     fault_factor,
     memory_weighted_factor,
+    memory_weighted_since,
 )
 from pump_friction_ros.evaluation.eha_settings import SensorSettings
-from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario
+from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario, SimulatedScenario
 from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
 from pump_friction_ros.evaluation.settings import FAMILIES, FAULTS, FULL, QUICK
 from pump_friction_ros.evaluation.true_pump import PumpVariant, true_table
@@ -286,3 +295,41 @@ def test_the_intermittent_truth_is_the_factor_the_isolation_memory_holds():
     w_on = 1.0 - math.exp(-10.0 / tau)  # the last 10 s, relative weight
     expected = 1.0 + 0.8 * w_on / (1.0 - math.exp(-20.0 / tau))
     assert memory_weighted_factor(step, sig, taken, dt, tau) == pytest.approx(expected, abs=1e-3)
+
+
+def test_the_intermittent_truth_counts_from_where_the_change_under_way_began():
+    n, dt = 18000, 1e-3
+    t = np.arange(n) * dt
+    on = np.where((np.arange(n) // 2000) % 2 == 0, 1.8, 1.0)  # 2 s on, 2 s off; on 16-18 s
+    sig = np.full(n, 0.2)
+    taken = (np.arange(n) % 3) != 0  # the monitor takes some samples only
+    for memory in (1e9, 3.0, 0.5):
+        # from the onset: the factor over every sample taken
+        assert memory_weighted_since(t[taken], on[taken], sig[taken], dt, memory,
+                                     -math.inf) == memory_weighted_factor(on, sig, taken, dt,
+                                                                          memory)
+        # a change that cleared in the off episode and began again at 16 s: that episode's
+        assert memory_weighted_since(t[taken], on[taken], sig[taken], dt, memory,
+                                     16.0) == pytest.approx(1.8)
+    # from the middle of the last off episode (14-16 s): 1 s off, 2 s on, by running
+    assert memory_weighted_since(t[taken], on[taken], sig[taken], dt, 1e9,
+                                 15.0) == pytest.approx((1.0 + 2 * 1.8) / 3, abs=1e-3)
+
+
+def test_a_reading_in_alarm_is_held_to_the_truth_of_the_change_it_reads():
+    n, dt = 18000, 1e-3
+    t = np.arange(n) * dt
+    on = np.where((np.arange(n) // 2000) % 2 == 0, 1.8, 1.0)  # on 16-18 s
+    since = partial(memory_weighted_since, t, on, np.full(n, 0.2), dt, 1e9)
+    empty = np.zeros(0)
+    sim = SimulatedScenario(*(empty,) * 12, motion={}, vp_truth=since(-math.inf),
+                            other_truth=1.0, other_truth_exact=True,
+                            above_min_speed_fraction=1.0, vp_truth_since=since)
+    assert sim.vp_truth == pytest.approx((5 * 1.8 + 4 * 1.0) / 9, abs=1e-3)
+    began = MonitorReading(WARN, 'valve_plate', 1.8, 0.05, 1.0, 0.1, 16.0)
+    assert valve_plate_truth(sim, began) == pytest.approx(1.8)  # that episode's
+    # no alarm: a scale of 1 spanning the unseen change over the memory since the onset
+    assert valve_plate_truth(sim, began._replace(level=OK)) == sim.vp_truth
+    assert valve_plate_truth(sim, began._replace(change_start_s=math.nan)) == sim.vp_truth
+    # a fault that stays: its factor at the end, whatever the monitor holds
+    assert valve_plate_truth(replace(sim, vp_truth_since=None), began) == sim.vp_truth

@@ -148,6 +148,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     # the torque reads this times the oil's warming since commissioning high: learnt drift
     values.append(('baseline_torque_drift_per_k', mon.measurement_drift_per_k))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
+    values.append(('change_start_s', mon.change_start_s))  # the scales' change began
     values += [(name, counts[name]) for name in COUNTERS]
     values += extra
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])

@@ -171,6 +171,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._set_signatures()
         self.level = OK
         self.alarm_onset_s = math.nan
+        self.change_start_s = math.nan  # the close of the first window of the change under way
         self._publish_fit()
 
     def _open(self, sign: float) -> None:
@@ -382,9 +383,10 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         drift = math.nan  # a k_t drift too small to be learnt, fitted with the change's size
         if self._gain_follow is not None and self._gain_follow.max_per_k > 0.0:
             drift = float(sig[_TORQUE_GAIN]) * (temperature - baseline.temperature_c)
-        self.isolation.add(sig, d, 1.0 / var, duration,
-                           self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0, drift,
-                           viscous)
+        changing = self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0
+        if not changing or math.isnan(self.change_start_s):  # the isolation's sums start
+            self.change_start_s = t_s if changing else math.nan
+        self.isolation.add(sig, d, 1.0 / var, duration, changing, drift, viscous)
         if self._gain_follow is not None:  # every window: a drift shows before the change
             self._gain_follow.add(sig, d, 1.0 / var, duration,
                                   temperature - baseline.temperature_c)

@@ -89,6 +89,7 @@ class MonitorPersistence:
     windows: int
     ewma_nm: float
     alarm_onset_s: float
+    change_start_s: float
     level: int
     cusum_pos_nm_s: float
     cusum_neg_nm_s: float
@@ -149,6 +150,7 @@ class MonitorPersistence:
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
                 'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
                 'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
+                'change_start_s': self.change_start_s,
                 'isolation': self.isolation.state(),
                 'allowance_nm_s': self._allowance_nm_s,
                 'gain_allowance_nm_s': self._gain_allowance_nm_s,
@@ -229,6 +231,9 @@ class MonitorPersistence:
         self._recent_s2, self._recent_s = s2, running
         self._set_signatures()
         self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
+        # came later: from a file without it, a change under way is dated from the next window
+        start = state.get('change_start_s', math.nan)
+        self.change_start_s = float(start)  # type: ignore[arg-type]
         self._pos, self._neg = pos, neg
         self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
         level = int(state['level'])  # type: ignore[call-overload]

@@ -55,7 +55,7 @@ from ..table.table_files import cached_table
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'baseline_learnt',
            'build_scenarios', 'prepare_true_tables', 'read_monitor', 'run_bank',
-           'run_scenario']
+           'run_scenario', 'valve_plate_truth']
 
 _NS = 1_000_000_000
 _CHUNK = 1 << 16  # events converted to Python floats at a time (bounds memory)
@@ -70,6 +70,7 @@ class MonitorReading(NamedTuple):
     vp_std: float  # its reported standard deviation [-]
     other_scale: float  # scale of the other friction components [-]
     other_std: float  # its reported standard deviation [-]
+    change_start_s: float = math.nan  # where the change the scales describe began [s]
 
 
 def read_monitor(core: TorqueEstimator) -> MonitorReading:
@@ -99,7 +100,36 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
         verdict = mon.verdict(side)[0]
         attribution = 'cannot_tell' if verdict == Verdict.NONE else verdict
     return MonitorReading(level, attribution, mon.theta_vp, mon.valve_plate_scale_std,
-                          mon.theta_rest, mon.rest_scale_std)
+                          mon.theta_rest, mon.rest_scale_std, mon.change_start_s)
+
+
+def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
+    """
+    Return the valve-plate factor a reading's scale is held to.
+
+    The scale of a monitor in alarm is its estimate over the change under way, whose sums
+    began where the CUSUMs last left zero (``reading.change_start_s``): an intermittent
+    fault's truth counts from there (``SimulatedScenario.vp_truth_since``). Otherwise (no
+    alarm: the scale is 1 and its interval spans what the detection does not see over the
+    recent running; or a fault that stays) the simulation's ``vp_truth``.
+
+    Parameters
+    ----------
+    sim : SimulatedScenario
+        The run's simulation.
+    reading : MonitorReading
+        The monitor's reading at its end.
+
+    Returns
+    -------
+    float
+        The truth [-].
+
+    """
+    if sim.vp_truth_since is not None and reading.level != OK and \
+            math.isfinite(reading.change_start_s):
+        return sim.vp_truth_since(reading.change_start_s)
+    return sim.vp_truth
 
 
 def baseline_learnt(core: TorqueEstimator) -> bool:
@@ -377,7 +407,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         first_alarm_s=math.nan if first is None else first / _NS,
         final_level=reading.level, attribution=reading.attribution,
         vp_scale=reading.vp_scale, vp_std=reading.vp_std, other_scale=reading.other_scale,
-        other_std=reading.other_std, vp_truth=sim.vp_truth, other_truth=sim.other_truth,
+        other_std=reading.other_std, vp_truth=valve_plate_truth(sim, reading),
+        other_truth=sim.other_truth,
         other_truth_exact=sim.other_truth_exact,
         monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,
         above_min_speed_fraction=sim.above_min_speed_fraction,

@@ -34,7 +34,7 @@ the fault factor at the end: what a perfect monitor would report.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, partial
 import math
 
 import numpy as np
@@ -60,7 +60,8 @@ from ..physics.pump_parameters import load_pump
 from ..table.friction_table import FrictionTable
 
 __all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor',
-           'memory_weighted_factor', 'oil_temperature', 'simulate_eha']
+           'memory_weighted_factor', 'memory_weighted_since', 'oil_temperature',
+           'simulate_eha']
 
 _PLANT_STREAM = 2  # sub-stream of the scenario's seed for the draws (the noise: its own)
 _EPISODE_STREAM = 3  # sub-stream of the intermittent fault's episodes
@@ -262,6 +263,39 @@ def memory_weighted_factor(factor: np.ndarray, signature_nm: np.ndarray, taken: 
     return float(np.sum(weight * factor[taken]) / np.sum(weight))
 
 
+def memory_weighted_since(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.ndarray,
+                          dt_s: float, memory_s: float, start_s: float) -> float:
+    """
+    Return `memory_weighted_factor` over the samples taken from ``start_s`` on.
+
+    The isolation's sums start afresh when both CUSUMs are back at zero (``attribution``):
+    an intermittent fault whose change cleared between its episodes is estimated from the
+    change under way at the end only, the monitor's ``change_start_s`` on.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Times of the samples the monitor takes after the onset [s].
+    factor : ndarray
+        The fault's factor at them [-].
+    signature_nm : ndarray
+        The cause's healthy friction magnitude at them [N m].
+    dt_s : float
+        Sample period [s].
+    memory_s : float
+        ``isolation_memory_s`` [s of monitored running].
+    start_s : float
+        Where the change under way began [s] (-inf: the onset).
+
+    Returns
+    -------
+    float
+        The weighted factor (the last given sample's where none is from ``start_s`` on).
+
+    """
+    return memory_weighted_factor(factor, signature_nm, t_s >= start_s, dt_s, memory_s)
+
+
 def _ratio(true: np.ndarray, model: np.ndarray) -> float:
     """Least-squares ratio of true to modelled magnitudes (nan without samples)."""
     den = float(np.dot(model, model))
@@ -322,10 +356,14 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     # the truths are relative to the healthy true pump: the monitor reports the change
     # from its learnt baseline (other friction: the healthy-weighted ratio of its parts)
     vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
-    if fault.intermittent:  # on and off: the level over the isolation's memory
-        vp_truth = memory_weighted_factor(np.broadcast_to(factors['valve_plate'], t.shape),
-                                          np.abs(true['valve_plate_nm']), gate & (t >= onset),
-                                          dt, config.isolation_memory_s)
+    vp_truth_since = None
+    taken = gate & (t >= onset)
+    if fault.intermittent and taken.any():  # on and off: the level over the isolation's memory
+        vp_factor = np.broadcast_to(factors['valve_plate'], t.shape)[taken]
+        vp_nm = np.abs(true['valve_plate_nm'][taken])
+        vp_truth_since = partial(memory_weighted_since, t[taken], vp_factor, vp_nm, dt,
+                                 config.isolation_memory_s)
+        vp_truth = vp_truth_since(-math.inf)
     other_true = sum(float(np.atleast_1d(factors[c])[-1]) * np.abs(true[f'{c}_nm'][gate])
                      for c in COMPONENTS[1:])
     other_healthy = sum(np.abs(true[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
@@ -354,7 +392,7 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
         true_speed_rad_s=speed[joint], true_accel_rad_s2=run.accel_rad_s2[joint],
         true_pressure_diff_pa=dp[joint], true_viscosity_m2_s=visc[joint],
         true_temperature_c=temp_true, motion=motion, vp_truth=vp_truth,
-        other_truth=other_truth, other_truth_exact=False,
+        other_truth=other_truth, other_truth_exact=False, vp_truth_since=vp_truth_since,
         above_min_speed_fraction=float(np.mean(np.abs(speed) >= config.monitor_min_speed_rad_s)),
         fault_running_nm=fault_running)
 

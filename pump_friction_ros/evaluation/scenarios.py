@@ -33,6 +33,7 @@ drive loss, viscosity and its temperature law) are those the estimator is config
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 import math
 import zlib
@@ -126,6 +127,10 @@ class SimulatedScenario:
     fault_running_nm: float = math.nan
     """Mean |torque the fault adds at its full size| over the running samples after the
     onset [N m] (`running_fault_torque_nm`); NaN for the nominal pump."""
+    vp_truth_since: Callable[[float], float] | None = None
+    """An intermittent fault's valve-plate truth over the change a monitor in alarm reads at
+    the end: the factor over the isolation's memory of the running since that change began
+    (the stamp given [s]; ``eha_scenarios.memory_weighted_since``). None: `vp_truth`."""
 
 
 def _draw(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
