@@ -398,6 +398,11 @@ def test_the_change_start_dates_the_windows_the_isolation_holds_and_survives_a_r
     assert math.isnan(again.change_start_s)
     run(again, rng, 1, TRUTH, change=_changed('valve_plate', 0.8), noise=0.002, t0=t)
     assert again.change_start_s > t  # dated from the first window after loading
+    healthy = monitor()  # a start without the isolation's windows, or not finite: none
+    healthy.load_state_dict(monitor().state_dict() | {'change_start_s': 12.0})
+    assert math.isnan(healthy.change_start_s)
+    again.load_state_dict(state | {'change_start_s': math.inf})
+    assert math.isnan(again.change_start_s)
     for _ in range(1500):  # repaired: the CUSUMs drain (from the cap: ~940 windows)
         t = run(mon, rng, 1, TRUTH, noise=0.002, t0=t)
         if mon.cusum_pos_nm_s == mon.cusum_neg_nm_s == 0.0:

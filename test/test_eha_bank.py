@@ -314,6 +314,12 @@ def test_the_intermittent_truth_counts_from_where_the_change_under_way_began():
     # from the middle of the last off episode (14-16 s): 1 s off, 2 s on, by running
     assert memory_weighted_since(t[taken], on[taken], sig[taken], dt, 1e9,
                                  15.0) == pytest.approx((1.0 + 2 * 1.8) / 3, abs=1e-3)
+    # with a memory of 0.5 s: the integral of exp(-age / m) over each part, age in running
+    # taken (2 of 3 samples: 2 s of time is 4/3 s of running), closed form
+    m, on_s, off_s = 0.5, 2.0 * 2 / 3, 1.0 * 2 / 3
+    w_on, w_off = 1.0 - math.exp(-on_s / m), math.exp(-on_s / m) - math.exp(-(on_s + off_s) / m)
+    assert memory_weighted_since(t[taken], on[taken], sig[taken], dt, m, 15.0) == \
+        pytest.approx((1.8 * w_on + 1.0 * w_off) / (w_on + w_off), abs=2e-3)
 
 
 def test_a_reading_in_alarm_is_held_to_the_truth_of_the_change_it_reads():
@@ -321,10 +327,13 @@ def test_a_reading_in_alarm_is_held_to_the_truth_of_the_change_it_reads():
     t = np.arange(n) * dt
     on = np.where((np.arange(n) // 2000) % 2 == 0, 1.8, 1.0)  # on 16-18 s
     since = partial(memory_weighted_since, t, on, np.full(n, 0.2), dt, 1e9)
-    empty = np.zeros(0)
-    sim = SimulatedScenario(*(empty,) * 12, motion={}, vp_truth=since(-math.inf),
-                            other_truth=1.0, other_truth_exact=True,
-                            above_min_speed_fraction=1.0, vp_truth_since=since)
+    arrays = dict.fromkeys((
+        't_s', 'speed_rad_s', 'torque_nm', 'pressure_t_s', 'pressure_diff_pa',
+        'temperature_t_s', 'temperature_c', 'true_speed_rad_s', 'true_accel_rad_s2',
+        'true_pressure_diff_pa', 'true_viscosity_m2_s', 'true_temperature_c'), np.zeros(0))
+    sim = SimulatedScenario(**arrays, motion={}, vp_truth=since(-math.inf), other_truth=1.0,
+                            other_truth_exact=True, above_min_speed_fraction=1.0,
+                            vp_truth_since=since)
     assert sim.vp_truth == pytest.approx((5 * 1.8 + 4 * 1.0) / 9, abs=1e-3)
     began = MonitorReading(WARN, 'valve_plate', 1.8, 0.05, 1.0, 0.1, 16.0)
     assert valve_plate_truth(sim, began) == pytest.approx(1.8)  # that episode's

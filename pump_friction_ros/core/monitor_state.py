@@ -231,9 +231,11 @@ class MonitorPersistence:
         self._recent_s2, self._recent_s = s2, running
         self._set_signatures()
         self.ewma_nm, self._var, self.alarm_onset_s = ewma, var, onset
-        # came later: from a file without it, a change under way is dated from the next window
-        start = state.get('change_start_s', math.nan)
-        self.change_start_s = float(start)  # type: ignore[arg-type]
+        # came later: from a file without it, a change under way is dated from the next
+        # window; a start without the isolation's windows (or not finite) dates nothing
+        start = float(state.get('change_start_s', math.nan))  # type: ignore[arg-type]
+        held = math.isfinite(start) and self.isolation.stats.windows > 0
+        self.change_start_s = start if held else math.nan
         self._pos, self._neg = pos, neg
         self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
         level = int(state['level'])  # type: ignore[call-overload]

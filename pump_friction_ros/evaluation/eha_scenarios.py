@@ -275,7 +275,7 @@ def memory_weighted_since(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.
     Parameters
     ----------
     t_s : ndarray
-        Times of the samples the monitor takes after the onset [s].
+        Times of the samples the monitor takes after the onset [s] (at least one).
     factor : ndarray
         The fault's factor at them [-].
     signature_nm : ndarray
