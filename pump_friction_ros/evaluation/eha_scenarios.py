@@ -369,7 +369,7 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     other_healthy = sum(np.abs(true[f'{c}_nm'][gate]) for c in COMPONENTS[1:])
     other_truth = _ratio(np.asarray(other_true), np.asarray(other_healthy))
     fault_running = running_fault_torque_nm(fault, true, true['theoretical_nm'], delivered,
-                                            direction, gate & (t >= onset))
+                                            direction, taken)
     del true, delivered
     # message streams: bursts hit every stream of the bus; drops and duplicates per message
     windows = bursts(scenario.duration_s, sens.burst_rate_per_h, s.sensors.burst_length_s, rng)
