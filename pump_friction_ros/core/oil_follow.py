@@ -24,19 +24,20 @@ bank's slow warm-ups (tau 490-880 s) were learnt at 660-1440 s, where the commis
 halves agreed, with up to 7 K still to come, and the valve plate then read 0.60-0.77 of
 healthy, in alarm (docs/monitor.md).
 
-A *fall* of a friction is, without the temperature, the oil thinning: the wear this
-monitor is for raises friction (a valve plate losing its film runs into the Coulomb
-friction of eq. 9; a worn bearing drags more), and a torque-measurement change has its own
-signature (the isolation tells it apart, ``attribution``). So where the detection would
-raise an alarm on the side below the baseline and the isolation names the valve plate or
-the other friction as falling, that friction's baseline level is lowered to the fall's
-present value (as the isolation estimates it when the alarm would be raised) and detection
-starts afresh: no alarm, and /diagnostics says how far the baseline has followed the oil
-(`OilFollow.note`). A rise is never followed: wear stays what the monitor judges, and so
-does oil that cools back after a follow (a pause, the next cold start: the followed levels
-are kept in the baseline file), which reads above the lowered baseline as "valve plate or
-oil viscosity"; following it back up would hide as much wear. With the temperature topic
-the model follows the viscosity itself and nothing here acts.
+A *fall* of a friction is, without the temperature, the oil thinning: the wear this monitor
+is for raises friction (a valve plate losing its film runs into the Coulomb friction of eq.
+9; a worn bearing drags more), and a torque-measurement change has its own signature (the
+isolation tells it apart, ``attribution``). So where the detection would raise an alarm on
+the side below the baseline and the isolation names the valve plate or the other friction
+as falling (or cannot tell which of the two fell, each one's own explanation a fall: then
+the one that explains it better; both thin with the oil), that friction's baseline level is
+lowered to the fall's present value (as the isolation estimates it when the alarm would be
+raised) and detection starts afresh: no alarm, and /diagnostics says how far the baseline
+has followed the oil (`OilFollow.note`). A rise is never followed: wear stays what the
+monitor judges, and so does oil that cools back after a follow (a pause, the next cold
+start: the followed levels are kept in the baseline file), which reads above the lowered
+baseline as "valve plate or oil viscosity"; following it back up would hide as much wear.
+With the temperature topic the model follows the viscosity itself and nothing here acts.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ import math
 
 import numpy as np
 
-from .attribution import FaultIsolation
+from .attribution import FaultIsolation, Verdict
 from .baseline import Baseline
 
 __all__ = ['FOLLOWED', 'OilFollow', 'followed', 'friction_fall']
@@ -100,15 +101,34 @@ def friction_fall(isolation: FaultIsolation) -> tuple[int, float]:
     tuple
         (index into `FOLLOWED`, change < 0: of a change still moving, the value its line
         reaches now), or (-1, NaN) where the isolation names neither friction, its change
-        is not a fall, or it comes and goes (an oil thins, it does not come and go).
+        is not a fall, or it comes and goes (an oil thins, it does not come and go). Where
+        it cannot tell the valve plate from the other friction and each one's change is a
+        fall, the one with the larger evidence, its change.
 
     """
-    j = isolation.verdict()[2]
-    if not 0 <= j < len(FOLLOWED) or isolation.comes_and_goes():
+    verdict, _, j = isolation.verdict()
+    if isolation.comes_and_goes():
         return -1, math.nan
-    line = isolation.moving(j)
-    change = line[0] if line is not None else float(isolation.evidence()[1][j])
+    if j < 0 and verdict == Verdict.CANNOT_TELL:
+        # the valve plate or the other friction, not told apart: a fall whichever it is
+        # (each one's own explanation a fall) is the oil thinning, followed on the one
+        # that explains it best; "cannot tell" between any other two is no fall of friction
+        t = np.nan_to_num(isolation.evidence()[0], nan=-1.0)
+        order = [int(i) for i in np.argsort(-t)]
+        if sorted(order[:2]) != list(range(len(FOLLOWED))) or \
+                not _present_change(isolation, order[1]) < 0.0:
+            return -1, math.nan
+        j = order[0]
+    if not 0 <= j < len(FOLLOWED):
+        return -1, math.nan
+    change = _present_change(isolation, j)
     return (j, change) if change < 0.0 else (-1, math.nan)
+
+
+def _present_change(isolation: FaultIsolation, j: int) -> float:
+    """Return cause j's relative change now: its line's present value while it moves."""
+    line = isolation.moving(j)
+    return line[0] if line is not None else float(isolation.evidence()[1][j])
 
 
 class OilFollow:
