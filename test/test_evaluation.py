@@ -500,3 +500,24 @@ def test_the_floors_count_only_the_runs_in_scope_and_say_why_the_others_are_not(
     assert '0.025-0.500' in text  # the fault's running torque over the runs
     assert '30.0 [40.0]' in text and 'x1.4 <= 40 s' in text
     assert in_scope(record())  # written before the fields were kept: unknown, in scope
+
+
+def test_a_fault_whose_named_alarm_cleared_before_the_end_counts_apart_as_cleared():
+    vp = {'family': 'eha_pick_place', 'fault': 'valve_plate_intermittent_1.8',
+          'allowance_nm': 0.025, 'fault_running_nm': 0.1, 'first_alarm_s': 1810.0,
+          'monitored_delay_s': 5.0}
+    bearing = {**vp, 'fault': 'bearing_x2.0', 'truth_class': 'other_friction'}
+    floors = floor_figures([
+        record(**vp, final_level=1, attribution='valve_plate'),
+        record(**vp, cleared_attribution='valve_plate'),  # cleared in an off episode
+        record(**vp, cleared_attribution='cannot_tell'),
+        record(**vp),  # never in alarm: no verdict at all
+        record(**bearing, cleared_attribution='valve_plate'),  # a wrong name is wrong too
+        record(**bearing, cleared_attribution='other_friction')])
+    cell = floors['faults']['valve_plate_intermittent_1.8']['all']
+    assert (cell['named'], cell['cleared_named'], cell['cannot_tell']) == (1, 1, 0)
+    other = floors['faults']['bearing_x2.0']['all']
+    assert (other['named'], other['cleared_named'], other['named_vp'],
+            other['cleared_vp']) == (0, 1, 0, 1)
+    text = format_floors(floors)
+    assert '1/4 +1 cleared' in text and '0/2 +1 cleared' in text

@@ -149,6 +149,11 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     values.append(('baseline_torque_drift_per_k', mon.measurement_drift_per_k))
     values.append(('alarm_onset_s', mon.alarm_onset_s))
     values.append(('change_start_s', mon.change_start_s))  # the scales' change began
+    alarm = mon.last_alarm  # kept after it clears (``last_alarm``)
+    values += [('last_alarm_onset_s', alarm.onset_s), ('last_alarm_cleared_s', alarm.cleared_s),
+               ('last_alarm_level', alarm.level),  # its verdict: in the message at OK
+               ('last_alarm_valve_plate_scale', alarm.valve_plate_scale),
+               ('last_alarm_valve_plate_scale_std', alarm.valve_plate_scale_std)]
     values += [(name, counts[name]) for name in COUNTERS]
     values += extra
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
@@ -174,7 +179,8 @@ def level_message(level: int, mon: WearMonitor) -> str:
     if level == OK:
         if mon.learning:
             return mon.baseline_status()
-        return 'torque as the healthy baseline'
+        note = mon.last_alarm.note()
+        return 'torque as the healthy baseline' + (f'; {note}' if note else '')
     verdict, words = mon.verdict(1.0)
     side = 'differs from' if verdict == 'not_friction' else (
         'above' if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else 'below')

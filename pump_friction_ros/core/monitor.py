@@ -48,7 +48,8 @@ is dropped), and each window mean is one measurement:
    the torque measurement with T - T_0, reading high as the oil warms, explains clearly
    better than any step is that drift, learnt instead (``gain_follow``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
-   zero, and the valve-plate and other friction scales relative to the healthy pump.
+   zero, and the valve-plate and other friction scales relative to the healthy pump. The
+   last alarm, its verdict with it, is kept after it clears (``last_alarm``).
 
 `state_dict` / `load_state_dict` carry everything learnt (the baseline's sums, the sums,
 the level), so that the node keeps it across restarts (``baseline_file``).
@@ -64,6 +65,7 @@ from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_
 from .baseline import Baseline, baseline_regressors, N_TERMS
 from .commissioning import Commissioning
 from .gain_follow import GainFollow
+from .last_alarm import LastAlarm
 from .monitor_report import MonitorReport
 from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
@@ -150,6 +152,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
             if follow is not None:
                 follow.reset()
         self.isolation.reset()
+        self.last_alarm = LastAlarm()  # kept after it clears; a repair forgets it
         self._reset_detection()
         self._open(0.0)
 
@@ -351,14 +354,10 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         dev = d - self.ewma_nm
         self.ewma_nm += a * dev
         self._var += a * (dev * dev - self._var)
-        # a CUSUM per cause on d projected on its signature, in N m at a typical point of
-        # commissioning: a change of any cause's shape drives its own sum (a torque gain
-        # moves d up when pumping and down when motoring, which one sum on d misses)
-        # the baseline's own uncertainty at this point is not a change: d shrunk by it (on a
-        # cycle reaching loads commissioning never saw, the extrapolation error alone would
-        # otherwise accumulate)
-        # and so is what the oil's temperature does to the torque (``oil_allowance``): the
-        # viscosity's band where it is assumed, the torque constant's drift
+        # a CUSUM per cause on d projected on its signature (in N m at a typical point of
+        # commissioning: a change of any cause's shape drives its own sum), d shrunk by the
+        # baseline's own uncertainty here (extrapolating beyond commissioning is no change)
+        # and by what the oil's temperature does to the torque (``oil_allowance``)
         viscous = low = high = 0.0
         if oil is not None:
             viscous = oil.window_nm(self._sw * inv)
@@ -392,6 +391,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                                   temperature - baseline.temperature_c)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         if level > OK and self._followed(temperature, baseline.temperature_c):
+            self.last_alarm.end(t_s)  # one under way: the oil's
             self.isolation.reset()  # (a drift learnt keeps the signatures, the oil's not)
             self._reset_detection(points=self.baseline is not baseline)
             return
@@ -400,11 +400,16 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                 self.alarm_onset_s = t_s
             elif level == OK:
                 self.alarm_onset_s = math.nan
+                self.last_alarm.end(t_s)
             self.level = level
         self._undetectable = self._unseen(self._allowance_s)
         self.isolation.bias.set_prior(self._undetectable)  # a bias it does not see (its bound)
         self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
             self.isolation.scales(baseline, self._undetectable, self.level != OK)
+        if self.level != OK:
+            self.last_alarm.during(self.alarm_onset_s, self.level, max(self.cusum_pos_nm_s,
+                                   self.cusum_neg_nm_s), *self.verdict(1.0), self.theta_vp,
+                                   self.valve_plate_scale_std)
 
     def _followed(self, temperature_c: float, reference_c: float) -> bool:
         """Follow a change that is the oil's, not the pump's; return whether (no alarm)."""

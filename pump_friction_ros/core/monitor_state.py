@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from .baseline import Baseline, BaselineLearner
     from .commissioning import Commissioning
     from .gain_follow import GainFollow
+    from .last_alarm import LastAlarm
     from .oil_follow import OilFollow
 
 __all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence', 'MonitorSettings', 'MonitorTrace']
@@ -90,6 +91,7 @@ class MonitorPersistence:
     ewma_nm: float
     alarm_onset_s: float
     change_start_s: float
+    last_alarm: LastAlarm
     level: int
     cusum_pos_nm_s: float
     cusum_neg_nm_s: float
@@ -133,10 +135,10 @@ class MonitorPersistence:
         Return what the monitor has learnt, as plain JSON-able values (persisted by the node).
 
         The baseline's sums (and whether it is complete), the CUSUM sums, level and EWMA,
-        the isolation's sums, and how far the friction baseline followed the oil
-        (``oil_follow``, where the viscosity is assumed) or the torque measurement's drift
-        learnt with the oil temperature (``gain_follow``, where it is measured); not the
-        open window (a fraction of a second).
+        the last alarm (``last_alarm``), the isolation's sums, and how far the friction
+        baseline followed the oil (``oil_follow``, where the viscosity is assumed) or the
+        torque measurement's drift learnt with the oil temperature (``gain_follow``, where
+        it is measured); not the open window (a fraction of a second).
 
         Returns
         -------
@@ -150,7 +152,7 @@ class MonitorPersistence:
                 'ewma_nm': self.ewma_nm, 'ewma_var_nm2': self._var,
                 'cusum_pos_nm_s': self._pos.tolist(), 'cusum_neg_nm_s': self._neg.tolist(),
                 'level': self.level, 'alarm_onset_s': self.alarm_onset_s,
-                'change_start_s': self.change_start_s,
+                'change_start_s': self.change_start_s, 'last_alarm': self.last_alarm.state(),
                 'isolation': self.isolation.state(),
                 'allowance_nm_s': self._allowance_nm_s,
                 'gain_allowance_nm_s': self._gain_allowance_nm_s,
@@ -242,5 +244,9 @@ class MonitorPersistence:
         if level not in (OK, WARN, ERROR):
             raise ValueError(f'monitor level {level}')
         self.level = level
+        if 'last_alarm' in state:  # came later: a file without it has kept none
+            self.last_alarm.load(state['last_alarm'])  # type: ignore[arg-type]
+        else:
+            self.last_alarm.clear()
         self._open(0.0)
         self._publish_fit()

@@ -71,6 +71,10 @@ class MonitorReading(NamedTuple):
     other_scale: float  # scale of the other friction components [-]
     other_std: float  # its reported standard deviation [-]
     change_start_s: float = math.nan  # where the change the scales describe began [s]
+    # at OK, the last alarm's verdict at its height (``last_alarm``), as ``attribution``
+    # ('none': no alarm cleared), and where it began [s]
+    cleared_attribution: str = 'none'
+    cleared_onset_s: float = math.nan
 
 
 def read_monitor(core: TorqueEstimator) -> MonitorReading:
@@ -79,7 +83,8 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
 
     The only place that knows the monitor's attributes. The attribution is the verdict the
     status message gives (``diagnostics.level_message``): the isolation's single cause; an
-    alarm for which no cause stands out yet counts as 'cannot_tell'.
+    alarm for which no cause stands out yet counts as 'cannot_tell'. Out of alarm, the
+    message says the last alarm that cleared, and its verdict: read so too.
 
     Parameters
     ----------
@@ -99,8 +104,12 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
         side = 1.0 if mon.cusum_pos_nm_s >= mon.cusum_neg_nm_s else -1.0
         verdict = mon.verdict(side)[0]
         attribution = 'cannot_tell' if verdict == Verdict.NONE else verdict
+    last, cleared = mon.last_alarm, 'none'
+    if level == OK and last.level != OK:
+        cleared = 'cannot_tell' if last.verdict == Verdict.NONE else last.verdict
     return MonitorReading(level, attribution, mon.theta_vp, mon.valve_plate_scale_std,
-                          mon.theta_rest, mon.rest_scale_std, mon.change_start_s)
+                          mon.theta_rest, mon.rest_scale_std, mon.change_start_s, cleared,
+                          last.onset_s)
 
 
 def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
@@ -169,6 +178,9 @@ class RunRecord:
     allowance_nm: float = math.nan  # the run's CUSUM allowance k [N m]
     warn_nm_s: float = math.nan  # the run's CUSUM WARN threshold h [N m s]
     baseline_learnt_s: float = math.nan  # when the healthy baseline was learnt; inf: never
+    # out of alarm at the end, the verdict of the last alarm if it began at or after the
+    # onset and cleared (what the status message says of it); 'none' otherwise
+    cleared_attribution: str = 'none'
 
     @property
     def delay_s(self) -> float:
@@ -415,7 +427,9 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         monitored_delay_s=math.inf if first is None else monitored * period_s,
         fault_running_nm=sim.fault_running_nm, allowance_nm=config.cusum_drift_nm,
         warn_nm_s=config.cusum_warn_nm_s,
-        baseline_learnt_s=math.inf if learnt is None else learnt / _NS)
+        baseline_learnt_s=math.inf if learnt is None else learnt / _NS,
+        cleared_attribution=reading.cleared_attribution
+        if reading.cleared_onset_s >= scenario.onset_s else 'none')
 
 
 def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,

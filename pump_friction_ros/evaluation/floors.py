@@ -171,6 +171,9 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
                 'reference_delay_p90_s': _p90([reference_delay_s(r) for r in scoped]),
                 'named': sum(r.attribution in right for r in scoped),
                 'named_vp': sum(r.attribution == 'valve_plate' for r in scoped),
+                # out of alarm at the end, named so by the last alarm, which cleared
+                'cleared_named': sum(r.cleared_attribution in right for r in scoped),
+                'cleared_vp': sum(r.cleared_attribution == 'valve_plate' for r in scoped),
                 'cannot_tell': sum(r.attribution == 'cannot_tell' for r in scoped),
                 'fault_nm_min': min(torques, default=math.nan),
                 'fault_nm_max': max(torques, default=math.nan),
@@ -195,8 +198,10 @@ def _cell(c: dict[str, Any], kind: str) -> str:
         return text + ('' if math.isnan(reference) else f' [{reference:.1f}]')
     if kind == 'named':
         text = f'{c["named"]}/{c["in_scope"]}'
-        return text + (f' ({c["cannot_tell"]} ?)' if c['cannot_tell'] else '')
-    return f'{c["named_vp"]}/{c["in_scope"]}'
+        text += f' ({c["cannot_tell"]} ?)' if c['cannot_tell'] else ''
+        return text + (f' +{c["cleared_named"]} cleared' if c['cleared_named'] else '')
+    text = f'{c["named_vp"]}/{c["in_scope"]}'
+    return text + (f' +{c["cleared_vp"]} cleared' if c['cleared_vp'] else '')
 
 
 def _row(per_family: dict[str, Any], families: list[str], first: str, label: str,
@@ -251,7 +256,9 @@ def format_floors(floors: dict[str, Any]) -> str:
               'monitored running from the onset to the first alarm (nearest rank); in '
               "square brackets the same percentile of h / (fault torque - k), a CUSUM's "
               'running to WARN on a constant input (a reference, not a bound). Named: of '
-              f'the runs in scope, undetected ones not named. Floors: {delays}; '
+              'the runs in scope, undetected ones not named, by the verdict at the end; '
+              '"+n cleared": n more runs out of alarm at the end whose last alarm, cleared, '
+              f'was named so (the status message says it). Floors: {delays}; '
               f'>= {FLOORS.named:.0%} named vp, <= {FLOORS.cannot_tell:.0%} cannot tell; no '
               'other fault named vp; each other fault named as its class.')
     return '\n'.join([line(head), '|' + '|'.join('-' * (w + 2) for w in widths) + '|',

@@ -1,0 +1,159 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The last alarm, kept after it cleared: when, how high, and what it was named.
+
+The monitor's level follows its CUSUMs: an alarm clears when they drain below
+``cusum_clear_ratio`` of the threshold. A fault that comes and goes (a valve plate that
+tilts under some loads) drains them in its off episodes, and its alarm clears with the
+verdict that named it; a maintenance engineer looking at the status then sees "torque as the
+healthy baseline" and nothing of the valve plate named minutes before. So the monitor keeps
+its last alarm: the close of the window that raised it, the close of the one that cleared
+it (NaN while it lasts), the highest level, and the verdict, its words and the valve-plate
+scale +- std at its height: the window where its CUSUM was highest (the latest of them at
+the cap). Not its last window: as the sums drain after a fault went off, the scales'
+memory fills with healthy windows (a valve plate x1.8 read 0.97 there). /diagnostics
+publishes it (``last_alarm_*``), the status message at OK says it, and the state file keeps
+it across restarts; a reset (a repair) forgets it with the baseline.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .monitor_state import ERROR, OK, WARN
+
+__all__ = ['LastAlarm']
+
+
+class LastAlarm:
+    """The monitor's last alarm, under way or cleared."""
+
+    def __init__(self) -> None:
+        self.clear()
+
+    def clear(self) -> None:
+        """Forget the last alarm (none since)."""
+        self.onset_s = math.nan
+        """Close of the window that raised it [s]; NaN: no alarm since the reset."""
+        self.cleared_s = math.nan
+        """Close of the window it cleared on [s]; NaN while it lasts."""
+        self.level = OK
+        """The highest level it reached (WARN or ERROR; OK: none)."""
+        self.cusum_nm_s = 0.0
+        """Its highest CUSUM, max(S+, S-) [N m s]: its height."""
+        self.verdict = ''
+        """`attribution.Verdict` value at its height."""
+        self.words = ''
+        """That verdict's words (the status message's)."""
+        self.valve_plate_scale = math.nan
+        """Valve-plate scale at its height [-]."""
+        self.valve_plate_scale_std = math.nan
+        """Its std [-]."""
+
+    def during(self, onset_s: float, level: int, cusum_nm_s: float, verdict: str, words: str,
+               valve_plate_scale: float, valve_plate_scale_std: float) -> None:
+        """
+        Take a window in alarm.
+
+        Parameters
+        ----------
+        onset_s : float
+            The alarm's onset (``WearMonitor.alarm_onset_s``) [s]: another than the one
+            held starts a new last alarm.
+        level : int
+            WARN or ERROR.
+        cusum_nm_s : float
+            max(S+, S-) [N m s]: at or above the highest so far, the reading is taken.
+        verdict : str
+            The isolation's verdict (`attribution.Verdict` value).
+        words : str
+            Its words.
+        valve_plate_scale, valve_plate_scale_std : float
+            The valve-plate scale and its std [-].
+
+        """
+        if onset_s != self.onset_s:
+            self.onset_s, self.level, self.cusum_nm_s = onset_s, level, -math.inf
+        self.level = max(self.level, level)
+        self.cleared_s = math.nan
+        if cusum_nm_s >= self.cusum_nm_s:
+            self.cusum_nm_s, self.verdict, self.words = cusum_nm_s, verdict, words
+            self.valve_plate_scale, self.valve_plate_scale_std = \
+                valve_plate_scale, valve_plate_scale_std
+
+    def end(self, t_s: float) -> None:
+        """
+        Clear the alarm under way, if one is, at ``t_s`` [s].
+
+        Parameters
+        ----------
+        t_s : float
+            Close of the window that cleared it (or that the baseline followed the oil on)
+            [s].
+
+        """
+        if self.active:
+            self.cleared_s = t_s
+
+    @property
+    def active(self) -> bool:
+        """Return whether the alarm is under way (raised, not cleared)."""
+        return self.level != OK and math.isnan(self.cleared_s)
+
+    def note(self) -> str:
+        """Return the cleared last alarm in words for the status message, or ''."""
+        if self.level == OK or self.active:
+            return ''
+        name = 'ERROR' if self.level == ERROR else 'WARN'
+        return (f'last alarm {name} {self.onset_s:.1f}-{self.cleared_s:.1f} s, cleared: '
+                f'{self.words}')
+
+    def state(self) -> dict[str, object]:
+        """Return the last alarm as plain values."""
+        return {'onset_s': self.onset_s, 'cleared_s': self.cleared_s, 'level': self.level,
+                'cusum_nm_s': self.cusum_nm_s, 'verdict': self.verdict, 'words': self.words,
+                'valve_plate_scale': self.valve_plate_scale,
+                'valve_plate_scale_std': self.valve_plate_scale_std}
+
+    def load(self, state: dict[str, object]) -> None:
+        """
+        Restore what `state` returned.
+
+        Parameters
+        ----------
+        state : dict
+            A `state` result.
+
+        Raises
+        ------
+        ValueError
+            A level that is not OK, WARN or ERROR, text that is not text, an alarm without
+            a finite onset, or one cleared before it began.
+
+        """
+        level = state['level']
+        onset, cleared, cusum, scale, std = (float(state[key]) for key in (  # type: ignore
+            'onset_s', 'cleared_s', 'cusum_nm_s', 'valve_plate_scale', 'valve_plate_scale_std'))
+        verdict, words = state['verdict'], state['words']
+        if level not in (OK, WARN, ERROR) or type(level) is not int or \
+                not isinstance(verdict, str) or not isinstance(words, str):
+            raise ValueError(f'last alarm: level {level!r} or its words not text')
+        if level != OK and not (math.isfinite(onset) and not cleared < onset
+                                and not math.isinf(cleared)):
+            raise ValueError(f'last alarm: onset {onset!r}, cleared {cleared!r}')
+        self.onset_s, self.cleared_s, self.level, self.cusum_nm_s = onset, cleared, level, cusum
+        self.verdict, self.words = verdict, words
+        self.valve_plate_scale, self.valve_plate_scale_std = scale, std

@@ -1,0 +1,144 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The last alarm outlives its clearing: an intermittent fault's name is not lost."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+from pump_friction_ros.core.attribution import Verdict
+from pump_friction_ros.core.diagnostics import level_message
+from pump_friction_ros.core.last_alarm import LastAlarm
+from pump_friction_ros.core.monitor import ERROR, OK, WARN
+from pump_friction_ros.evaluation.bank import read_monitor
+import pytest
+
+from .test_baseline_monitor import _changed, DT, monitor, run, TRUTH
+
+
+def _episode(mon, rng, t, on_windows, cause='valve_plate', size=0.8):
+    """Run a change for ``on_windows``, then healthy until the level is back at OK."""
+    onsets, levels, height, in_alarm = set(), [], -1.0, None
+    cleared = math.nan
+    for k in range(on_windows + 2000):  # then off: the CUSUMs drain, the alarm clears
+        before = mon.level
+        change = _changed(cause, size) if k < on_windows else None
+        t = run(mon, rng, 1, TRUTH, change=change, noise=0.002, t0=t)
+        if mon.level != OK:
+            levels.append(mon.level)
+            onsets.add(mon.alarm_onset_s)
+            assert mon.last_alarm.active and mon.last_alarm.onset_s == mon.alarm_onset_s
+            cusum = max(mon.cusum_pos_nm_s, mon.cusum_neg_nm_s)
+            if cusum >= height:  # the alarm at its height: the reading then
+                height = cusum
+                in_alarm = (mon.verdict(1.0), mon.theta_vp, mon.valve_plate_scale_std)
+        elif before != OK:
+            cleared = t - DT  # the last sample of the window it cleared on
+            break
+    return t, onsets, max(levels), in_alarm, cleared
+
+
+def _commissioned(seed):
+    mon = monitor()
+    rng = np.random.default_rng(seed)
+    t = run(mon, rng, 240, TRUTH, noise=0.002)
+    assert not mon.learning and mon.level == OK and mon.last_alarm.level == OK
+    return mon, rng, t
+
+
+@pytest.mark.parametrize('seed', [41, 42])
+def test_an_alarm_that_cleared_is_kept_with_its_verdict_and_said_at_ok(seed):
+    mon, rng, t = _commissioned(seed)
+    assert level_message(OK, mon) == 'torque as the healthy baseline'  # none yet
+    t, onsets, highest, in_alarm, cleared = _episode(mon, rng, t, 60)
+    assert mon.level == OK and len(onsets) == 1 and highest >= WARN
+    last = mon.last_alarm
+    assert not last.active
+    assert last.onset_s == onsets.pop() < last.cleared_s == pytest.approx(cleared)
+    assert last.level == highest
+    # what the alarm said at its height, not what the healthy windows as it drained say
+    (verdict, words), scale, std = in_alarm
+    assert verdict == Verdict.VALVE_PLATE == last.verdict and last.words == words
+    assert (last.valve_plate_scale, last.valve_plate_scale_std) == (scale, std)
+    assert abs(last.valve_plate_scale - 1.8) < 1.96 * last.valve_plate_scale_std
+    message = level_message(OK, mon)
+    assert message.startswith('torque as the healthy baseline; last alarm ')
+    assert f'{last.onset_s:.1f}-{last.cleared_s:.1f} s, cleared: valve plate' in message
+
+
+def test_a_new_alarm_replaces_the_last_one():
+    mon, rng, t = _commissioned(43)
+    t, first, *_ = _episode(mon, rng, t, 60)
+    t, second, highest, ((verdict, _), *_), _ = _episode(mon, rng, t, 60, 'torque_offset',
+                                                         0.1)
+    last = mon.last_alarm
+    assert last.onset_s == second.pop() > first.pop()
+    assert last.level == highest and last.verdict == verdict == Verdict.NOT_FRICTION
+
+
+def test_the_last_alarm_survives_a_restart_and_a_reset_forgets_it():
+    mon, rng, t = _commissioned(44)
+    _episode(mon, rng, t, 60)
+    state = mon.state_dict()
+    again = monitor()
+    again.load_state_dict(state)
+    assert again.last_alarm.state() == mon.last_alarm.state()
+    assert level_message(OK, again) == level_message(OK, mon)
+    older = {key: value for key, value in state.items() if key != 'last_alarm'}
+    again.load_state_dict(older)  # a file from before it was kept: none
+    assert again.last_alarm.level == OK and level_message(OK, again).endswith('baseline')
+    mon.reset()  # a repair: learnt afresh, the old alarm is history
+    assert mon.last_alarm.level == OK and math.isnan(mon.last_alarm.onset_s)
+
+
+@pytest.mark.parametrize('bad', [{'level': 7}, {'level': 1.0}, {'verdict': 3},
+                                 {'cleared_s': 1.0}, {'onset_s': math.nan},
+                                 {'cleared_s': math.inf}])
+def test_a_bad_last_alarm_in_the_state_is_refused_and_changes_nothing(bad):
+    mon, rng, t = _commissioned(45)
+    _episode(mon, rng, t, 60)
+    before = mon.state_dict()
+    assert before['last_alarm']['onset_s'] > 1.0
+    with pytest.raises(ValueError, match='malformed monitor state'):
+        mon.load_state_dict(before | {'last_alarm': before['last_alarm'] | bad})
+    assert mon.state_dict() == before
+
+
+def test_an_alarm_still_under_way_is_not_a_cleared_one():
+    alarm = LastAlarm()
+    alarm.during(10.0, WARN, 0.7, Verdict.VALVE_PLATE, 'valve plate', 1.8, 0.1)
+    alarm.during(10.0, ERROR, 1.3, Verdict.VALVE_PLATE, 'valve plate', 1.9, 0.1)
+    alarm.during(10.0, WARN, 0.9, Verdict.CANNOT_TELL, 'cannot tell', 1.2, 0.3)
+    assert alarm.active and alarm.note() == '' and alarm.level == ERROR  # the highest
+    assert (alarm.verdict, alarm.valve_plate_scale) == (Verdict.VALVE_PLATE, 1.9)  # its height
+    alarm.end(20.0)
+    alarm.end(30.0)  # nothing under way: the clearing stays the first
+    assert not alarm.active and alarm.cleared_s == 20.0
+    assert alarm.note() == 'last alarm ERROR 10.0-20.0 s, cleared: valve plate'
+
+
+def test_the_bank_reads_the_cleared_alarm_s_verdict_only_out_of_alarm():
+    mon, rng, t = _commissioned(46)
+    core = SimpleNamespace(monitor=mon)  # read_monitor reads the estimator's monitor only
+    assert read_monitor(core).cleared_attribution == 'none'
+    t, onsets, *_ = _episode(mon, rng, t, 60)
+    reading = read_monitor(core)
+    assert reading.level == OK and reading.attribution == 'none'
+    assert reading.cleared_attribution == Verdict.VALVE_PLATE
+    assert reading.cleared_onset_s == onsets.pop()
+    run(mon, rng, 60, TRUTH, change=_changed('valve_plate', 0.8), noise=0.002, t0=t)
+    again = read_monitor(core)  # in alarm again: the verdict now, nothing cleared
+    assert again.level >= WARN and again.attribution == Verdict.VALVE_PLATE
+    assert again.cleared_attribution == 'none'
