@@ -19,11 +19,13 @@ from types import SimpleNamespace
 
 import numpy as np
 from pump_friction_ros.core.attribution import Verdict
+from pump_friction_ros.core.baseline_file import _DUMPER
 from pump_friction_ros.core.diagnostics import level_message
 from pump_friction_ros.core.last_alarm import LastAlarm
 from pump_friction_ros.core.monitor import ERROR, OK, WARN
 from pump_friction_ros.evaluation.bank import read_monitor
 import pytest
+import yaml
 
 from .test_baseline_monitor import _changed, DT, monitor, run, TRUTH
 
@@ -104,7 +106,7 @@ def test_the_last_alarm_survives_a_restart_and_a_reset_forgets_it():
 
 
 @pytest.mark.parametrize('bad', [{'level': 7}, {'level': 1.0}, {'verdict': 3},
-                                 {'cleared_s': 1.0}, {'onset_s': math.nan},
+                                 {'followed': 'yes'}, {'onset_s': math.nan},
                                  {'cleared_s': math.inf}])
 def test_a_bad_last_alarm_in_the_state_is_refused_and_changes_nothing(bad):
     mon, rng, t = _commissioned(45)
@@ -114,6 +116,51 @@ def test_a_bad_last_alarm_in_the_state_is_refused_and_changes_nothing(bad):
     with pytest.raises(ValueError, match='malformed monitor state'):
         mon.load_state_dict(before | {'last_alarm': before['last_alarm'] | bad})
     assert mon.state_dict() == before
+
+
+def test_an_alarm_under_way_goes_through_the_baseline_file_and_goes_on_after_it(tmp_path):
+    mon, rng, t = _commissioned(47)
+    for _ in range(60):  # in alarm at the restart: its clearing NaN, its height finite
+        t = run(mon, rng, 1, TRUTH, change=_changed('valve_plate', 0.8), noise=0.002, t0=t)
+    assert mon.level >= WARN and mon.last_alarm.active
+    path = tmp_path / 'state.yaml'  # the baseline file's own YAML writer and reader
+    state = mon.state_dict()
+    path.write_text(yaml.dump(state['last_alarm'], Dumper=_DUMPER, sort_keys=False))
+    again = monitor()
+    again.load_state_dict(state | {'last_alarm': yaml.safe_load(path.read_text())})
+    saved = again.last_alarm.state()
+    assert math.isnan(saved.pop('cleared_s'))
+    assert saved == {k: v for k, v in mon.last_alarm.state().items() if k != 'cleared_s'}
+    # the same alarm goes on: its onset kept, cleared when the CUSUMs drain
+    _, onsets, *_ = _episode(again, rng, t, 1)
+    assert onsets == {mon.last_alarm.onset_s} and not again.last_alarm.active
+
+
+def test_a_clock_restarted_during_an_alarm_is_kept_and_the_next_alarm_is_new():
+    mon, rng, _ = _commissioned(48)  # commissioned at 0-60 s; the clock then restarts
+    _, onsets, *_ = _episode(mon, rng, 10_000.0, 60)
+    _, second, *_ = _episode(mon, rng, onsets.pop(), 60)  # the next alarm: the same stamps
+    last = mon.last_alarm
+    assert last.onset_s == second.pop() and last.cleared_s > last.onset_s
+    # a clearing before its onset (stamps restarted in between) is a state like any other
+    state = mon.state_dict()
+    state['last_alarm'] = state['last_alarm'] | {'cleared_s': last.onset_s - 9_000.0}
+    again = monitor()
+    again.load_state_dict(state)
+    assert again.last_alarm.cleared_s == last.onset_s - 9_000.0
+
+
+def test_an_alarm_the_oil_follow_ended_says_so_and_the_bank_does_not_count_it_cleared():
+    mon, rng, t = _commissioned(49)
+    _episode(mon, rng, t, 60)
+    alarm = mon.last_alarm
+    assert ' s, cleared: valve plate' in alarm.note()
+    alarm.onset_s, alarm.cleared_s = 5.0, math.nan  # as if under way, then followed
+    alarm.end(7.0, followed=True)
+    name = 'ERROR' if alarm.level == ERROR else 'WARN'
+    assert alarm.note() == (f'last alarm {name} 5.0-7.0 s, taken for the oil thinning '
+                            f'(baseline followed): {alarm.words}')
+    assert read_monitor(SimpleNamespace(monitor=mon)).cleared_attribution == 'none'
 
 
 def test_an_alarm_still_under_way_is_not_a_cleared_one():

@@ -26,7 +26,10 @@ scale +- std at its height: the window where its CUSUM was highest (the latest o
 the cap). Not its last window: as the sums drain after a fault went off, the scales'
 memory fills with healthy windows (a valve plate x1.8 read 0.97 there). /diagnostics
 publishes it (``last_alarm_*``), the status message at OK says it, and the state file keeps
-it across restarts; a reset (a repair) forgets it with the baseline.
+it across restarts; a reset (a repair) forgets it with the baseline. An alarm that ended
+because the baseline followed the oil down (``oil_follow``: without temperature topic, a
+fall of friction is the oil thinning) did not clear: it was taken for the oil, and says so.
+The stamps are the inputs' (a clock restarted since can put the clearing before the onset).
 """
 
 from __future__ import annotations
@@ -49,7 +52,9 @@ class LastAlarm:
         self.onset_s = math.nan
         """Close of the window that raised it [s]; NaN: no alarm since the reset."""
         self.cleared_s = math.nan
-        """Close of the window it cleared on [s]; NaN while it lasts."""
+        """Close of the window it cleared (or was followed) on [s]; NaN while it lasts."""
+        self.followed = False
+        """It ended as the oil followed down, not cleared."""
         self.level = OK
         """The highest level it reached (WARN or ERROR; OK: none)."""
         self.cusum_nm_s = 0.0
@@ -71,8 +76,8 @@ class LastAlarm:
         Parameters
         ----------
         onset_s : float
-            The alarm's onset (``WearMonitor.alarm_onset_s``) [s]: another than the one
-            held starts a new last alarm.
+            The alarm's onset (``WearMonitor.alarm_onset_s``) [s]; where none is under way
+            (`active`), a new last alarm starts.
         level : int
             WARN or ERROR.
         cusum_nm_s : float
@@ -85,28 +90,30 @@ class LastAlarm:
             The valve-plate scale and its std [-].
 
         """
-        if onset_s != self.onset_s:
+        if not self.active:
             self.onset_s, self.level, self.cusum_nm_s = onset_s, level, -math.inf
+            self.cleared_s, self.followed = math.nan, False
         self.level = max(self.level, level)
-        self.cleared_s = math.nan
         if cusum_nm_s >= self.cusum_nm_s:
             self.cusum_nm_s, self.verdict, self.words = cusum_nm_s, verdict, words
             self.valve_plate_scale, self.valve_plate_scale_std = \
                 valve_plate_scale, valve_plate_scale_std
 
-    def end(self, t_s: float) -> None:
+    def end(self, t_s: float, followed: bool = False) -> None:
         """
-        Clear the alarm under way, if one is, at ``t_s`` [s].
+        End the alarm under way, if one is, at ``t_s`` [s].
 
         Parameters
         ----------
         t_s : float
-            Close of the window that cleared it (or that the baseline followed the oil on)
+            Close of the window that cleared it, or that the baseline followed the oil on
             [s].
+        followed : bool
+            The baseline followed the oil down: taken for the oil, not cleared.
 
         """
         if self.active:
-            self.cleared_s = t_s
+            self.cleared_s, self.followed = t_s, followed
 
     @property
     def active(self) -> bool:
@@ -118,13 +125,14 @@ class LastAlarm:
         if self.level == OK or self.active:
             return ''
         name = 'ERROR' if self.level == ERROR else 'WARN'
-        return (f'last alarm {name} {self.onset_s:.1f}-{self.cleared_s:.1f} s, cleared: '
-                f'{self.words}')
+        how = 'taken for the oil thinning (baseline followed)' if self.followed else 'cleared'
+        return f'last alarm {name} {self.onset_s:.1f}-{self.cleared_s:.1f} s, {how}: {self.words}'
 
     def state(self) -> dict[str, object]:
         """Return the last alarm as plain values."""
-        return {'onset_s': self.onset_s, 'cleared_s': self.cleared_s, 'level': self.level,
-                'cusum_nm_s': self.cusum_nm_s, 'verdict': self.verdict, 'words': self.words,
+        return {'onset_s': self.onset_s, 'cleared_s': self.cleared_s, 'followed': self.followed,
+                'level': self.level, 'cusum_nm_s': self.cusum_nm_s, 'verdict': self.verdict,
+                'words': self.words,
                 'valve_plate_scale': self.valve_plate_scale,
                 'valve_plate_scale_std': self.valve_plate_scale_std}
 
@@ -141,19 +149,20 @@ class LastAlarm:
         ------
         ValueError
             A level that is not OK, WARN or ERROR, text that is not text, an alarm without
-            a finite onset, or one cleared before it began.
+            a finite onset or with an infinite clearing (NaN: under way), ``followed`` not
+            a bool.
 
         """
-        level = state['level']
+        level, followed = state['level'], state.get('followed', False)
         onset, cleared, cusum, scale, std = (float(state[key]) for key in (  # type: ignore
             'onset_s', 'cleared_s', 'cusum_nm_s', 'valve_plate_scale', 'valve_plate_scale_std'))
         verdict, words = state['verdict'], state['words']
         if level not in (OK, WARN, ERROR) or type(level) is not int or \
-                not isinstance(verdict, str) or not isinstance(words, str):
-            raise ValueError(f'last alarm: level {level!r} or its words not text')
-        if level != OK and not (math.isfinite(onset) and not cleared < onset
-                                and not math.isinf(cleared)):
+                not isinstance(verdict, str) or not isinstance(words, str) or \
+                type(followed) is not bool:
+            raise ValueError(f'last alarm: level {level!r}, its words or followed {followed!r}')
+        if level != OK and not (math.isfinite(onset) and not math.isinf(cleared)):
             raise ValueError(f'last alarm: onset {onset!r}, cleared {cleared!r}')
         self.onset_s, self.cleared_s, self.level, self.cusum_nm_s = onset, cleared, level, cusum
-        self.verdict, self.words = verdict, words
+        self.followed, self.verdict, self.words = followed, verdict, words
         self.valve_plate_scale, self.valve_plate_scale_std = scale, std

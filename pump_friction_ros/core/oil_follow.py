@@ -102,8 +102,9 @@ def friction_fall(isolation: FaultIsolation) -> tuple[int, float]:
         (index into `FOLLOWED`, change < 0: of a change still moving, the value its line
         reaches now), or (-1, NaN) where the isolation names neither friction, its change
         is not a fall, or it comes and goes (an oil thins, it does not come and go). Where
-        it cannot tell the valve plate from the other friction and each one's change is a
-        fall, the one with the larger evidence, its change.
+        it cannot tell the valve plate from the other friction, both lead every other
+        cause by ``attribution_z`` squared and each one's change is a fall, the one with the
+        larger evidence, its change.
 
     """
     verdict, _, j = isolation.verdict()
@@ -112,10 +113,14 @@ def friction_fall(isolation: FaultIsolation) -> tuple[int, float]:
     if j < 0 and verdict == Verdict.CANNOT_TELL:
         # the valve plate or the other friction, not told apart: a fall whichever it is
         # (each one's own explanation a fall) is the oil thinning, followed on the one
-        # that explains it best; "cannot tell" between any other two is no fall of friction
+        # whose evidence leads (the single-cause GLR; the verdict's own ranking fits a small
+        # k_t drift with each, and either friction's fall lowers the baseline by the same
+        # torque where their signatures are one), both ahead of every other cause by
+        # attribution_z^2, as a friction named is; a tie with a measurement change is not
         t = np.nan_to_num(isolation.evidence()[0], nan=-1.0)
         order = [int(i) for i in np.argsort(-t)]
         if sorted(order[:2]) != list(range(len(FOLLOWED))) or \
+                not t[order[1]] - t[order[2]] >= isolation.settings.attribution_z ** 2 or \
                 not _present_change(isolation, order[1]) < 0.0:
             return -1, math.nan
         j = order[0]
