@@ -106,7 +106,7 @@ def test_the_last_alarm_survives_a_restart_and_a_reset_forgets_it():
 
 
 @pytest.mark.parametrize('bad', [{'level': 7}, {'level': 1.0}, {'verdict': 3},
-                                 {'followed': 'yes'}, {'onset_s': math.nan},
+                                 {'followed': True}, {'onset_s': math.nan},
                                  {'cleared_s': math.inf}])
 def test_a_bad_last_alarm_in_the_state_is_refused_and_changes_nothing(bad):
     mon, rng, t = _commissioned(45)
@@ -150,17 +150,23 @@ def test_a_clock_restarted_during_an_alarm_is_kept_and_the_next_alarm_is_new():
     assert again.last_alarm.cleared_s == last.onset_s - 9_000.0
 
 
-def test_an_alarm_the_oil_follow_ended_says_so_and_the_bank_does_not_count_it_cleared():
+def test_an_alarm_the_baseline_followed_says_what_for_and_the_bank_does_not_count_it():
     mon, rng, t = _commissioned(49)
     _episode(mon, rng, t, 60)
     alarm = mon.last_alarm
     assert ' s, cleared: valve plate' in alarm.note()
     alarm.onset_s, alarm.cleared_s = 5.0, math.nan  # as if under way, then followed
-    alarm.end(7.0, followed=True)
+    alarm.end(7.0, 'oil')
     name = 'ERROR' if alarm.level == ERROR else 'WARN'
     assert alarm.note() == (f'last alarm {name} 5.0-7.0 s, taken for the oil thinning '
-                            f'(baseline followed): {alarm.words}')
+                            f'(friction baseline followed): {alarm.words}')
     assert read_monitor(SimpleNamespace(monitor=mon)).cleared_attribution == 'none'
+    alarm.cleared_s = math.nan  # with the temperature topic: the k_t drift learnt instead
+    alarm.end(7.0, 'drift')
+    assert "taken for the torque measurement's drift with the oil temperature" in alarm.note()
+    again = monitor()  # what it was taken for goes through the state file
+    again.load_state_dict(mon.state_dict())
+    assert again.last_alarm.note() == alarm.note()
 
 
 def test_an_alarm_still_under_way_is_not_a_cleared_one():

@@ -27,8 +27,9 @@ the cap). Not its last window: as the sums drain after a fault went off, the sca
 memory fills with healthy windows (a valve plate x1.8 read 0.97 there). /diagnostics
 publishes it (``last_alarm_*``), the status message at OK says it, and the state file keeps
 it across restarts; a reset (a repair) forgets it with the baseline. An alarm that ended
-because the baseline followed the oil down (``oil_follow``: without temperature topic, a
-fall of friction is the oil thinning) did not clear: it was taken for the oil, and says so.
+because the baseline followed it did not clear, and says what it was taken for: without
+temperature topic the oil thinning (``oil_follow``: a fall of friction), with it the torque
+measurement drifting with the oil temperature (``gain_follow``, the drift learnt).
 The stamps are the inputs' (a clock restarted since can put the clearing before the onset).
 """
 
@@ -38,7 +39,12 @@ import math
 
 from .monitor_state import ERROR, OK, WARN
 
-__all__ = ['LastAlarm']
+__all__ = ['FOLLOWED', 'LastAlarm']
+
+FOLLOWED = {'oil': 'taken for the oil thinning (friction baseline followed)',
+            'drift': "taken for the torque measurement's drift with the oil temperature "
+                     '(drift learnt)'}
+"""What an alarm the baseline followed was taken for: `LastAlarm.followed`'s values."""
 
 
 class LastAlarm:
@@ -53,8 +59,9 @@ class LastAlarm:
         """Close of the window that raised it [s]; NaN: no alarm since the reset."""
         self.cleared_s = math.nan
         """Close of the window it cleared (or was followed) on [s]; NaN while it lasts."""
-        self.followed = False
-        """It ended as the oil followed down, not cleared."""
+        self.followed = ''
+        """'' (cleared, or under way), or the `FOLLOWED` key of what the baseline followed
+        when it ended."""
         self.level = OK
         """The highest level it reached (WARN or ERROR; OK: none)."""
         self.cusum_nm_s = 0.0
@@ -92,24 +99,24 @@ class LastAlarm:
         """
         if not self.active:
             self.onset_s, self.level, self.cusum_nm_s = onset_s, level, -math.inf
-            self.cleared_s, self.followed = math.nan, False
+            self.cleared_s, self.followed = math.nan, ''
         self.level = max(self.level, level)
         if cusum_nm_s >= self.cusum_nm_s:
             self.cusum_nm_s, self.verdict, self.words = cusum_nm_s, verdict, words
             self.valve_plate_scale, self.valve_plate_scale_std = \
                 valve_plate_scale, valve_plate_scale_std
 
-    def end(self, t_s: float, followed: bool = False) -> None:
+    def end(self, t_s: float, followed: str = '') -> None:
         """
         End the alarm under way, if one is, at ``t_s`` [s].
 
         Parameters
         ----------
         t_s : float
-            Close of the window that cleared it, or that the baseline followed the oil on
-            [s].
-        followed : bool
-            The baseline followed the oil down: taken for the oil, not cleared.
+            Close of the window that cleared it, or that the baseline followed it on [s].
+        followed : str
+            '' (cleared), or what the baseline followed instead of alarming (a `FOLLOWED`
+            key).
 
         """
         if self.active:
@@ -125,7 +132,7 @@ class LastAlarm:
         if self.level == OK or self.active:
             return ''
         name = 'ERROR' if self.level == ERROR else 'WARN'
-        how = 'taken for the oil thinning (baseline followed)' if self.followed else 'cleared'
+        how = FOLLOWED[self.followed] if self.followed else 'cleared'
         return f'last alarm {name} {self.onset_s:.1f}-{self.cleared_s:.1f} s, {how}: {self.words}'
 
     def state(self) -> dict[str, object]:
@@ -150,16 +157,16 @@ class LastAlarm:
         ValueError
             A level that is not OK, WARN or ERROR, text that is not text, an alarm without
             a finite onset or with an infinite clearing (NaN: under way), ``followed`` not
-            a bool.
+            '' or a `FOLLOWED` key.
 
         """
-        level, followed = state['level'], state.get('followed', False)
+        level, followed = state['level'], state.get('followed', '')
         onset, cleared, cusum, scale, std = (float(state[key]) for key in (  # type: ignore
             'onset_s', 'cleared_s', 'cusum_nm_s', 'valve_plate_scale', 'valve_plate_scale_std'))
         verdict, words = state['verdict'], state['words']
         if level not in (OK, WARN, ERROR) or type(level) is not int or \
                 not isinstance(verdict, str) or not isinstance(words, str) or \
-                type(followed) is not bool:
+                not (followed == '' or followed in FOLLOWED):
             raise ValueError(f'last alarm: level {level!r}, its words or followed {followed!r}')
         if level != OK and not (math.isfinite(onset) and not math.isinf(cleared)):
             raise ValueError(f'last alarm: onset {onset!r}, cleared {cleared!r}')

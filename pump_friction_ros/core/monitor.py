@@ -391,7 +391,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                                   temperature - baseline.temperature_c)
         level = self._level(max(self.cusum_pos_nm_s, self.cusum_neg_nm_s))
         if level > OK and self._followed(temperature, baseline.temperature_c):
-            self.last_alarm.end(t_s, followed=True)  # one under way: the oil's
+            self.last_alarm.end(t_s, 'oil' if self._follow is not None else 'drift')
             self.isolation.reset()  # (a drift learnt keeps the signatures, the oil's not)
             self._reset_detection(points=self.baseline is not baseline)
             return

@@ -72,7 +72,7 @@ class MonitorReading(NamedTuple):
     other_std: float  # its reported standard deviation [-]
     change_start_s: float = math.nan  # where the change the scales describe began [s]
     # at OK, the last alarm's verdict at its height (``last_alarm``), as ``attribution``
-    # ('none': no alarm cleared; one the oil follow ended was taken for the oil), its onset [s]
+    # ('none': none cleared; one the baseline followed was taken for no fault), its onset [s]
     cleared_attribution: str = 'none'
     cleared_onset_s: float = math.nan
 
@@ -105,7 +105,7 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
         verdict = mon.verdict(side)[0]
         attribution = 'cannot_tell' if verdict == Verdict.NONE else verdict
     last, cleared = mon.last_alarm, 'none'
-    if level == OK and last.level != OK and not last.followed:  # (followed: the oil's)
+    if level == OK and last.level != OK and not last.followed:  # a followed one: no fault
         cleared = 'cannot_tell' if last.verdict == Verdict.NONE else last.verdict
     return MonitorReading(level, attribution, mon.theta_vp, mon.valve_plate_scale_std,
                           mon.theta_rest, mon.rest_scale_std, mon.change_start_s, cleared,
