@@ -171,12 +171,15 @@ def test_an_alarm_the_baseline_followed_says_what_for_and_the_bank_does_not_coun
 
 def test_an_alarm_still_under_way_is_not_a_cleared_one():
     alarm = LastAlarm()
+    assert alarm.verdict_under_way == ''
     alarm.during(10.0, WARN, 0.7, Verdict.VALVE_PLATE, 'valve plate', 1.8, 0.1)
     alarm.during(10.0, ERROR, 1.3, Verdict.VALVE_PLATE, 'valve plate', 1.9, 0.1)
     alarm.during(10.0, WARN, 0.9, Verdict.CANNOT_TELL, 'cannot tell', 1.2, 0.3)
     assert alarm.active and alarm.note() == '' and alarm.level == ERROR  # the highest
     assert (alarm.verdict, alarm.valve_plate_scale) == (Verdict.VALVE_PLATE, 1.9)  # its height
+    assert alarm.verdict_under_way == Verdict.VALVE_PLATE  # (no drift learnt: gain_follow)
     alarm.end(20.0)
+    assert alarm.verdict_under_way == ''
     alarm.end(30.0)  # nothing under way: the clearing stays the first
     assert not alarm.active and alarm.cleared_s == 20.0
     assert alarm.note() == 'last alarm ERROR 10.0-20.0 s, cleared: valve plate'

@@ -75,6 +75,8 @@ _GAINS = (CAUSES.index('torque_gain'), CAUSES.index('pressure_gain'))
 the pressure (1 + p) high, which reads the torque low against it."""
 _READS_HIGH = (1.0, -1.0)
 """The sign of each gain's change that reads the torque high against the pressure."""
+_FRICTIONS = (Verdict.VALVE_PLATE, Verdict.OTHER_FRICTION)
+"""The verdicts that name a friction: an alarm that named one is not a drift to learn."""
 
 
 class GainFollow:
@@ -174,8 +176,8 @@ class GainFollow:
                                                 + per_k[1] * float(signatures[_GAINS[1]]))
         return term if math.isfinite(term) else 0.0
 
-    def follow(self, isolation: FaultIsolation, temperature_c: float,
-               reference_c: float) -> bool:
+    def follow(self, isolation: FaultIsolation, temperature_c: float, reference_c: float,
+               alarm_verdict: str = Verdict.NONE) -> bool:
         """
         Learn the measurement's drift where it explains the change; return whether.
 
@@ -188,6 +190,12 @@ class GainFollow:
             uses each window's own temperature).
         reference_c : float
             Commissioning's mean oil temperature T_0 [degC].
+        alarm_verdict : str
+            The verdict at the height of the alarm under way (`LastAlarm.verdict`; none
+            before its first window): where it named a friction, nothing is learnt. An
+            intermittent fault turns "not friction" in its off episodes (seed 2's cold
+            start, installation 0: a valve plate 1.38 at the height, then a torque drift
+            learnt that ended its alarm); the alarm clears instead as its CUSUM decays.
 
         Returns
         -------
@@ -197,7 +205,7 @@ class GainFollow:
 
         """
         delta_c = temperature_c - reference_c
-        if not (math.isfinite(delta_c) and delta_c) or \
+        if not (math.isfinite(delta_c) and delta_c) or alarm_verdict in _FRICTIONS or \
                 isolation.verdict()[0] != Verdict.NOT_FRICTION:
             return False
         i, step = self._drift_fit(isolation)

@@ -127,6 +127,11 @@ class LastAlarm:
         """Return whether the alarm is under way (raised, not cleared)."""
         return self.level != OK and math.isnan(self.cleared_s)
 
+    @property
+    def verdict_under_way(self) -> str:
+        """Return the verdict at the height of the alarm under way ('' where none is)."""
+        return self.verdict if self.active else ''
+
     def note(self) -> str:
         """Return the cleared last alarm in words for the status message, or ''."""
         if self.level == OK or self.active:

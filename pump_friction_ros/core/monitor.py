@@ -419,7 +419,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                 self.baseline = followed
             return followed is not None
         return self._gain_follow is not None and self._gain_follow.follow(
-            self.isolation, temperature_c, reference_c)
+            self.isolation, temperature_c, reference_c, self.last_alarm.verdict_under_way)
 
     def _learn(self, h: np.ndarray, e_nm: float, weight: float, duration_s: float,
                t_s: float, temperature_c: float) -> None:
