@@ -54,7 +54,9 @@ warmer than commissioning, low when cooler), and the coefficients stay within
 alike, so oil cooling back reads healthy) and detection starts afresh: no alarm, and
 /diagnostics says what was learnt (``note``). A change the other way (a torque constant
 reading low as the oil warms), one larger than the largest drift, and any friction change
-are never followed: they stay what the monitor judges. Without the temperature topic the
+are never followed: they stay what the monitor judges, and nothing is learnt while the
+alarm under way was named a friction at its height (an intermittent fault's off episodes
+read "not friction"; its alarm clears on its own). Without the temperature topic the
 oil's temperature is not known, and nothing here acts (the fixed
 ``torque_constant_drift_per_k`` allowance, ``oil_allowance``, may).
 """
