@@ -212,6 +212,22 @@ def test_valve_plate_wear_during_the_warm_up_is_found_and_named_not_followed(see
     assert mon.measurement_drift_per_k <= 1.5e-3
 
 
+def test_the_monitor_asks_the_gain_follow_with_the_height_of_the_alarm_under_way():
+    # the wear above: its alarm's first window has no height yet; every later one the
+    # verdict at the alarm's height, the valve plate at the end
+    mon = _monitor()
+    asked, follow = [], mon._gain_follow.follow
+
+    def spy(isolation, temperature_c, reference_c, alarm_verdict=Verdict.NONE):
+        asked.append(alarm_verdict)
+        return follow(isolation, temperature_c, reference_c, alarm_verdict)
+
+    mon._gain_follow.follow = spy
+    warm(mon, 1.0e-3, 37, wear=1.8)
+    assert mon.level > OK and len(asked) > 1
+    assert asked[0] == '' and asked[-1] == mon.last_alarm.verdict == Verdict.VALVE_PLATE
+
+
 def test_the_learnt_drift_survives_a_restart_and_a_reset_forgets_it():
     mon = _monitor()
     warm(mon, 1.0e-3, 31)
