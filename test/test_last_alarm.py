@@ -106,7 +106,7 @@ def test_the_last_alarm_survives_a_restart_and_a_reset_forgets_it():
 
 
 @pytest.mark.parametrize('bad', [{'level': 7}, {'level': 1.0}, {'verdict': 3},
-                                 {'followed': True}, {'onset_s': math.nan},
+                                 {'followed': 'yes'}, {'onset_s': math.nan},
                                  {'cleared_s': math.inf}])
 def test_a_bad_last_alarm_in_the_state_is_refused_and_changes_nothing(bad):
     mon, rng, t = _commissioned(45)
@@ -167,6 +167,21 @@ def test_an_alarm_the_baseline_followed_says_what_for_and_the_bank_does_not_coun
     again = monitor()  # what it was taken for goes through the state file
     again.load_state_dict(mon.state_dict())
     assert again.last_alarm.note() == alarm.note()
+
+
+def test_a_last_alarm_written_with_followed_as_a_bool_loads_as_the_oil_s_or_none():
+    # files of the code before what an alarm was taken for was named: True meant the oil
+    # follow, the only follow then; an upgrade must not refuse a state of months
+    mon, rng, t = _commissioned(49)
+    _episode(mon, rng, t, 60)
+    state = mon.state_dict()
+    for old, now in ((True, 'oil'), (False, '')):
+        state['last_alarm']['followed'] = old
+        again = monitor()
+        again.load_state_dict(state)
+        assert again.last_alarm.followed == now
+        assert again.last_alarm.note().startswith('last alarm')
+        assert ('taken for the oil thinning' in again.last_alarm.note()) == old
 
 
 def test_an_alarm_still_under_way_is_not_a_cleared_one():

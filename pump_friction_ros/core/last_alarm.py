@@ -162,10 +162,12 @@ class LastAlarm:
         ValueError
             A level that is not OK, WARN or ERROR, text that is not text, an alarm without
             a finite onset or with an infinite clearing (NaN: under way), ``followed`` not
-            '' or a `FOLLOWED` key.
+            '' or a `FOLLOWED` key (nor a bool: the oil's or none, as files wrote it before).
 
         """
         level, followed = state['level'], state.get('followed', '')
+        if type(followed) is bool:  # a file of 3b1f855-671d6f4: the oil follow, the only one
+            followed = 'oil' if followed else ''
         onset, cleared, cusum, scale, std = (float(state[key]) for key in (  # type: ignore
             'onset_s', 'cleared_s', 'cusum_nm_s', 'valve_plate_scale', 'valve_plate_scale_std'))
         verdict, words = state['verdict'], state['words']
