@@ -73,6 +73,7 @@ from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
 from .friction_choice import choose_friction
+from .healthy_level import interval, with_unseen_level
 from .signatures import signature_matrix
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
@@ -119,12 +120,6 @@ class AttributionSettings:
     isolation_memory_s: float
     isolation_episode_lack_of_fit: float
     scale_systematic_std: float
-
-
-def _interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
-    """Return the 95 % interval of a relative change, the level's uncertainty added."""
-    half = Z95 * math.sqrt(var + (change * level_rel_std) ** 2)
-    return change - half, change + half
 
 
 def _evidence(stats: ChangeStats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -361,8 +356,8 @@ class FaultIsolation:
                         f'is a parameter: no temperature topic) ({scale})')
         return _CLASS[j], name, j
 
-    def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool
-               ) -> tuple[float, float, float, float]:
+    def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool,
+               oil_moved: bool = False) -> tuple[float, float, float, float]:
         """
         Return the valve-plate and other friction scales relative to healthy, with stds.
 
@@ -389,7 +384,8 @@ class FaultIsolation:
         has a band (``oil_temperature_band_c``), each end of the fit's span (and of the
         line's) first moves out by what an oil anywhere in the band moves it
         (`ChangeStats.oil_bias`): the reading is the valve plate's or the oil's, and the
-        interval must hold the valve plate's.
+        interval must hold the valve plate's. Where no band is stated and the oil was seen
+        to move (``oil_moved``), it holds every healthy level within ``undetectable``.
 
         Parameters
         ----------
@@ -400,6 +396,8 @@ class FaultIsolation:
             see on this duty cycle [-] (``WearMonitor.undetectable_change``).
         confirmed : bool
             The monitor is at WARN or ERROR.
+        oil_moved : bool
+            `healthy_level.oil_seen_moving`.
 
         Returns
         -------
@@ -411,7 +409,8 @@ class FaultIsolation:
         out: list[float] = []
         if not self.stats.windows:
             for i in (_VP, _OTHER):
-                out += [1.0, max(floor, float(undetectable[i]) / Z95)]
+                u = float(undetectable[i])
+                out += [1.0, max(floor, with_unseen_level(-u, u, u * oil_moved)[1] / Z95)]
             return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
         level_std = baseline.std()
@@ -425,22 +424,25 @@ class FaultIsolation:
             # the baseline's uncertainty of the friction level, relative to it
             level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
             change = delta if delta == delta else 0.0
-            low, high = _interval(change, noise * noise + floor * floor, level_rel_std)
+            low, high = interval(change, noise * noise + floor * floor, level_rel_std)
             oil, oil_now = self.stats.oil_bias(i)
             if oil > 0.0:  # the oil anywhere in its band
                 low, high = low - oil, high + oil
+            u = float(undetectable[i]) if oil_moved else 0.0  # the healthy level's range
             if confirmed and named == i:
                 line = self.moving(i)
                 if line is not None:
-                    now_low, now_high = _interval(line[0], line[1] + floor * floor, level_rel_std)
+                    now_low, now_high = interval(line[0], line[1] + floor * floor, level_rel_std)
                     if oil_now > 0.0:
                         now_low, now_high = now_low - oil_now, now_high + oil_now
                     low, high = min(low, now_low), max(high, now_high)
+                low, high = with_unseen_level(low, high, u)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
-                low, high = min(0.0, low), max(0.0, high)
+                low, high = with_unseen_level(min(0.0, low), max(0.0, high), u)
             else:  # no change confirmed: 1, +- whatever might be there
                 half = max(-low, high, float(undetectable[i]))
-                low, high = -half, half
+                high = with_unseen_level(-half, half, u)[1]
+                low = -high
             out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95]
         return out[0], out[1], out[2], out[3]
 

@@ -404,8 +404,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
             self.level = level
         self._undetectable = self._unseen(self._allowance_s)
         self.isolation.bias.set_prior(self._undetectable)  # a bias it does not see (its bound)
-        self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
-            self.isolation.scales(baseline, self._undetectable, self.level != OK)
+        self._publish_fit()
         if self.level != OK:
             self.last_alarm.during(self.alarm_onset_s, self.level, max(self.cusum_pos_nm_s,
                                    self.cusum_neg_nm_s), *self.verdict(1.0), self.theta_vp,
@@ -484,7 +483,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         floor = self._floor
         if self.baseline is not None:  # the change from it (none under way: 1 +- unseen)
             self.theta_vp, self.valve_plate_scale_std, self.theta_rest, self.rest_scale_std = \
-                self.isolation.scales(self.baseline, self._undetectable, self.level != OK)
+                self.isolation.scales(self.baseline, self._undetectable, self.level != OK,
+                                      self.oil_moved)
             return
         coef, std = self.fit.coefficients, self.fit.std()
         self.theta_vp = 1.0 + float(coef[0])

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .attribution import CAUSES, Verdict
+from .healthy_level import oil_seen_moving
 
 if TYPE_CHECKING:
     from .attribution import FaultIsolation
@@ -89,8 +90,25 @@ class MonitorReport:
         baseline = self.baseline
         notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
                                 baseline is not None) if self._oil is not None else '',
-                 *(f.note() for f in (self._follow, self._gain_follow) if f is not None))
+                 *(f.note() for f in (self._follow, self._gain_follow) if f is not None),
+                 "the oil was seen moving without temperature topic: the friction scales' "
+                 'intervals hold the healthy level anywhere within the change the detection '
+                 'does not see' if baseline is not None and self.oil_moved else '')
         return '; '.join(x for x in notes if x)
+
+    @property
+    def oil_moved(self) -> bool:
+        """
+        Return whether the healthy friction level now is known only within the unseen change.
+
+        Without temperature topic and band, once the oil was seen to move: commissioning
+        restarted (its halves disagreed) or the baseline followed a fall
+        (`healthy_level.oil_seen_moving`).
+        """
+        band = self._oil.band_c if self._oil is not None else 0.0
+        follows = self._follow.times if self._follow is not None else 0
+        return oil_seen_moving(self._follow is not None, band, self.commissioning.restarts,
+                               follows)
 
     @property
     def measurement_drift_per_k(self) -> float:

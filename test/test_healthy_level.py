@@ -1,0 +1,112 @@
+# Copyright 2026 pump_friction_ros developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""Without the temperature, the healthy level now is known within the unseen change."""
+
+import numpy as np
+from pump_friction_ros.core.attribution import Verdict
+from pump_friction_ros.core.friction_bias import Z95
+from pump_friction_ros.core.healthy_level import oil_seen_moving, with_unseen_level
+from pump_friction_ros.core.monitor import OK, WARN
+import pytest
+
+from .test_baseline_monitor import _changed, run, TRUTH
+from .test_oil_follow import commissioned, thinning
+
+
+@pytest.mark.parametrize(('low', 'high', 'unseen'), [
+    (-0.1, 0.1, 0.2), (0.3, 0.5, 0.25), (-0.4, -0.2, 0.1), (0.0, 0.0, 0.3), (-0.5, 1.5, 0.6)])
+def test_the_interval_over_an_unseen_healthy_level_holds_every_ratio_and_no_more(
+        low, high, unseen):
+    # every reading c in [low, high] over every healthy level 1 + b, |b| <= unseen: the
+    # wear (1 + c) / (1 + b) - 1; the interval is exactly their range (closed form: the
+    # ratio is monotone in each, its extremes at the corners)
+    c, b = np.meshgrid(np.linspace(low, high, 201), np.linspace(-unseen, unseen, 201))
+    wear = (1.0 + c) / (1.0 + b) - 1.0
+    lo, hi = with_unseen_level(low, high, unseen)
+    assert lo == pytest.approx(wear.min(), abs=1e-12)
+    assert hi == pytest.approx(wear.max(), abs=1e-12)
+    assert with_unseen_level(low, high, 0.0) == (low, high)
+
+
+def test_an_unseen_change_of_the_whole_level_leaves_the_scale_unbounded_above():
+    lo, hi = with_unseen_level(-0.1, 0.1, 1.0)
+    assert lo == pytest.approx(0.9 / 2.0 - 1.0)
+    assert hi > 1e5
+
+
+@pytest.mark.parametrize(('assumed', 'band', 'restarts', 'follows', 'expected'), [
+    (True, 0.0, 1, 0, True), (True, 0.0, 0, 2, True), (True, 0.0, 0, 0, False),
+    (False, 0.0, 3, 0, False), (True, 3.0, 1, 1, False)])
+def test_the_healthy_level_is_uncertain_without_topic_or_band_once_the_oil_was_seen_moving(
+        assumed, band, restarts, follows, expected):
+    assert oil_seen_moving(assumed, band, restarts, follows) is expected
+
+
+def test_a_steady_installation_without_topic_keeps_its_intervals():
+    mon, rng, t = commissioned(True, 31)
+    run(mon, rng, 480, TRUTH, t0=t)
+    assert mon.commissioning.restarts == 0 and not mon.oil_moved
+    # the published interval is the one over the baseline's own level
+    vp, vp_std, _, _ = mon.isolation.scales(mon.baseline, mon._undetectable, False, False)
+    assert (mon.theta_vp, mon.valve_plate_scale_std) == (vp, vp_std)
+
+
+def _wear_on_an_oil_thinned_unseen(seed):
+    """
+    Return the monitor after a valve plate x1.6 on an oil that thinned past its follow.
+
+    The oil thins to 0.7, the baseline follows it down (the oil seen moving), the oil goes
+    on thinning by 0.8 times the change the detection does not see, then the valve plate
+    wears to 1.6 times its friction on that oil: the truth, over the healthy pump now.
+    """
+    mon, rng, t = commissioned(True, seed)
+    t, highest = thinning(mon, rng, t, 0.7)
+    assert highest == OK and mon.oil_moved
+    followed = mon.state_dict()['oil_follow']['valve_plate']
+    # the level now over the learnt one: the followed level, thinned within the unseen
+    oil = followed * (1.0 - 0.8 * mon.undetectable_change['valve_plate'])
+    t = run(mon, rng, 240, TRUTH, change=_changed('valve_plate', oil - 1.0), t0=t)
+    assert mon.level == OK and mon.state_dict()['oil_follow']['valve_plate'] == followed
+    run(mon, rng, 240, TRUTH, change=_changed('valve_plate', oil * 1.6 - 1.0), t0=t)
+    assert mon.level >= WARN
+    return mon
+
+
+def test_wear_read_on_an_oil_thinned_unseen_is_inside_the_interval_once_the_oil_moved():
+    named = old_misses = 0
+    for seed in range(41, 53):
+        mon = _wear_on_an_oil_thinned_unseen(seed)
+        if mon.verdict(1.0)[0] != Verdict.VALVE_PLATE:
+            continue
+        named += 1
+        assert abs(mon.theta_vp - 1.6) <= Z95 * mon.valve_plate_scale_std, seed
+        # over the followed level as if it were the healthy one now
+        vp, vp_std, _, _ = mon.isolation.scales(mon.baseline, mon._undetectable, True, False)
+        old_misses += abs(vp - 1.6) > Z95 * vp_std
+    assert named >= 10
+    assert old_misses >= named // 3  # (the reading is 1.6 x the unseen thinning)
+
+
+def test_with_the_temperature_topic_the_healthy_level_is_the_baselines():
+    mon, rng, t = commissioned(False, 45)
+    t, _ = thinning(mon, rng, t, 0.7)  # an alarm there: the model follows the oil itself
+    assert not mon.oil_moved
+
+
+def test_the_diagnostics_say_why_the_intervals_hold_an_unseen_oil():
+    mon, rng, t = commissioned(True, 46)
+    assert 'seen moving' not in mon.oil_note
+    thinning(mon, rng, t, 0.7)
+    assert 'seen moving without temperature topic' in mon.oil_note
