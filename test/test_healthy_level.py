@@ -16,12 +16,13 @@
 
 import numpy as np
 from pump_friction_ros.core.attribution import Verdict
+from pump_friction_ros.core.baseline import baseline_regressors
 from pump_friction_ros.core.friction_bias import Z95
 from pump_friction_ros.core.healthy_level import oil_seen_moving, with_unseen_level
 from pump_friction_ros.core.monitor import OK, WARN
 import pytest
 
-from .test_baseline_monitor import _changed, run, TRUTH
+from .test_baseline_monitor import _changed, feed, monitor, run, TRUTH
 from .test_oil_follow import commissioned, thinning
 
 
@@ -57,10 +58,73 @@ def test_the_healthy_level_is_uncertain_without_topic_or_band_once_the_oil_was_s
 def test_a_steady_installation_without_topic_keeps_its_intervals():
     mon, rng, t = commissioned(True, 31)
     run(mon, rng, 480, TRUTH, t0=t)
-    assert mon.commissioning.restarts == 0 and not mon.oil_moved
-    # the published interval is the one over the baseline's own level
-    vp, vp_std, _, _ = mon.isolation.scales(mon.baseline, mon._undetectable, False, False)
-    assert (mon.theta_vp, mon.valve_plate_scale_std) == (vp, vp_std)
+    assert mon.commissioning.restarts == 0 and mon.state_dict()['oil_follow']['times'] == 0
+    assert not mon.oil_moved and 'seen moving' not in mon.oil_note
+
+
+def _collinear(mon, rng):
+    """Commission on one friction shape (other = 2 x valve plate), then a valve plate x1.8."""
+    t = 0.0
+    for k in range(480):
+        vp = float(rng.uniform(0.1, 0.5))
+        sign = 1.0 if k % 2 else -1.0
+        th_s = float(rng.uniform(-3.0, 3.0))
+        e = float(baseline_regressors(vp, 2.0 * vp, th_s, sign) @ TRUTH) + \
+            rng.normal(0.0, 0.01) + (0.8 * (1 + TRUTH[0]) * vp if k >= 240 else 0.0)
+        t = feed(mon, t, e, vp, 2.0 * vp, th_s * sign, sign)
+
+
+def _state(case):
+    """Return a no-topic monitor in one of `scales`' cases."""
+    mon, rng, t = commissioned(True, 51)
+    if case == 'no windows':
+        mon.isolation.reset()
+    elif case == 'no change':
+        run(mon, rng, 120, TRUTH, t0=t)
+        assert mon.cusum_pos_nm_s == mon.cusum_neg_nm_s == 0.0
+    elif case == 'not confirmed':  # a change under way, below the threshold
+        run(mon, rng, 12, TRUTH, change=_changed('valve_plate', 0.3), t0=t)
+        assert mon.cusum_pos_nm_s > 0.0 and mon.isolation.stats.windows
+    elif case in ('valve_plate', 'torque_offset'):
+        run(mon, rng, 240, TRUTH, change=_changed(case, 0.8 if case == 'valve_plate' else 0.1),
+            t0=t)
+    else:  # cannot tell
+        mon = monitor(viscosity_assumed=True)
+        _collinear(mon, np.random.default_rng(6))
+    return mon
+
+
+def _ends(scale, std):
+    return scale - 1.0 - Z95 * std, scale - 1.0 + Z95 * std
+
+
+@pytest.mark.parametrize(('case', 'verdict'), [
+    ('no windows', Verdict.NONE), ('no change', Verdict.NONE), ('not confirmed', Verdict.NONE),
+    ('valve_plate', Verdict.VALVE_PLATE), ('torque_offset', Verdict.NOT_FRICTION),
+    ('cannot tell', Verdict.CANNOT_TELL)])
+def test_every_case_of_the_scales_carries_the_interval_over_the_unseen_healthy_level(
+        case, verdict):
+    mon = _state(case)
+    confirmed = mon.level != OK
+    assert confirmed == (verdict != Verdict.NONE)
+    if confirmed:
+        assert mon.verdict(1.0)[0] == verdict
+    before = mon.isolation.scales(mon.baseline, mon._undetectable, confirmed, False)
+    after = mon.isolation.scales(mon.baseline, mon._undetectable, confirmed, True)
+    for k, cause in ((0, 'valve_plate'), (2, 'other_friction')):
+        unseen = mon.undetectable_change[cause]
+        old, new = _ends(*before[k:k + 2]), _ends(*after[k:k + 2])
+        named = {Verdict.VALVE_PLATE: 'valve_plate', Verdict.NOT_FRICTION: 'torque_offset'}
+        if confirmed and verdict != Verdict.CANNOT_TELL and named[verdict] != cause:
+            assert new == old  # another cause named: no change of this one, as before
+        elif not confirmed:  # still 1, the larger half either side
+            assert after[k] == 1.0
+            assert new[1] == pytest.approx(with_unseen_level(*old, unseen)[1], rel=1e-12)
+            assert new[0] == pytest.approx(-new[1], rel=1e-12)
+        else:
+            assert new == pytest.approx(with_unseen_level(*old, unseen), rel=1e-12)
+        assert new[0] <= old[0] and new[1] >= old[1]  # it holds the interval over the baseline
+        assert unseen == 0.0 or new[1] - new[0] > old[1] - old[0] or new == old
 
 
 def _wear_on_an_oil_thinned_unseen(seed):
@@ -99,10 +163,17 @@ def test_wear_read_on_an_oil_thinned_unseen_is_inside_the_interval_once_the_oil_
     assert old_misses >= named // 3  # (the reading is 1.6 x the unseen thinning)
 
 
-def test_with_the_temperature_topic_the_healthy_level_is_the_baselines():
-    mon, rng, t = commissioned(False, 45)
-    t, _ = thinning(mon, rng, t, 0.7)  # an alarm there: the model follows the oil itself
-    assert not mon.oil_moved
+@pytest.mark.parametrize('assumed', [True, False])
+def test_with_the_temperature_topic_the_healthy_level_is_the_baselines(assumed):
+    # commissioning restarted (a pump still changing): the oil seen moving only without topic
+    mon = monitor(viscosity_assumed=assumed)
+    rng = np.random.default_rng(3)
+    t = 0.0
+    for step in range(10):  # settling, then steady
+        t = run(mon, rng, 60 if step < 8 else 240,
+                TRUTH + np.array([0.6 * 0.8 ** min(step, 7), 0, 0, 0, 0, 0]), t0=t)
+    assert mon.commissioning.restarts >= 1 and not mon.learning
+    assert mon.oil_moved == assumed
 
 
 def test_the_diagnostics_say_why_the_intervals_hold_an_unseen_oil():

@@ -397,7 +397,7 @@ class FaultIsolation:
         confirmed : bool
             The monitor is at WARN or ERROR.
         oil_moved : bool
-            `healthy_level.oil_seen_moving`.
+            The healthy level now is known only within ``undetectable`` (`healthy_level`).
 
         Returns
         -------
@@ -409,8 +409,8 @@ class FaultIsolation:
         out: list[float] = []
         if not self.stats.windows:
             for i in (_VP, _OTHER):
-                u = float(undetectable[i])
-                out += [1.0, max(floor, with_unseen_level(-u, u, u * oil_moved)[1] / Z95)]
+                half, u = max(Z95 * floor, float(undetectable[i])), float(undetectable[i])
+                out += [1.0, with_unseen_level(-half, half, u * oil_moved)[1] / Z95]
             return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
         level_std = baseline.std()

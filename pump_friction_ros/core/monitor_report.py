@@ -86,7 +86,7 @@ class MonitorReport:
 
     @property
     def oil_note(self) -> str:
-        """Return why an oil allowance has no effect, how far the oil was followed, or ''."""
+        """Return why an allowance has no effect, the oil followed or seen moving, or ''."""
         baseline = self.baseline
         notes = (self._oil.note(math.nan if baseline is None else baseline.temperature_c,
                                 baseline is not None) if self._oil is not None else '',
@@ -101,9 +101,13 @@ class MonitorReport:
         """
         Return whether the healthy friction level now is known only within the unseen change.
 
-        Without temperature topic and band, once the oil was seen to move: commissioning
-        restarted (its halves disagreed) or the baseline followed a fall
-        (`healthy_level.oil_seen_moving`).
+        Returns
+        -------
+        bool
+            Without temperature topic and band, the oil was seen to move: commissioning
+            restarted (its halves disagreed) or the baseline followed a fall
+            (`healthy_level.oil_seen_moving`).
+
         """
         band = self._oil.band_c if self._oil is not None else 0.0
         follows = self._follow.times if self._follow is not None else 0
