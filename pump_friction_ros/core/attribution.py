@@ -385,7 +385,7 @@ class FaultIsolation:
         line's) first moves out by what an oil anywhere in the band moves it
         (`ChangeStats.oil_bias`): the reading is the valve plate's or the oil's, and the
         interval must hold the valve plate's. Where no band is stated and the oil was seen
-        to move (``oil_moved``), it holds every healthy level within ``undetectable``.
+        to move (``oil_moved``), every interval holds each healthy level within ``undetectable``.
 
         Parameters
         ----------
@@ -413,13 +413,14 @@ class FaultIsolation:
                 out += [1.0, with_unseen_level(-half, half, u * oil_moved)[1] / Z95]
             return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
-        level_std = baseline.std()
-        coef = baseline.coefficients
+        level_std, coef = baseline.std(), baseline.coefficients
         for i in (_VP, _OTHER):
             delta, std = self.friction_change(i)
             noise = std if std == std else 1.0
+            u = float(undetectable[i]) if oil_moved else 0.0  # the healthy level's range
             if confirmed and named >= 0 and named != i:  # another cause explains it
-                out += [1.0, math.hypot(noise, floor)]
+                half = Z95 * math.hypot(noise, floor)
+                out += [1.0, with_unseen_level(-half, half, u)[1] / Z95]
                 continue
             # the baseline's uncertainty of the friction level, relative to it
             level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
@@ -428,7 +429,6 @@ class FaultIsolation:
             oil, oil_now = self.stats.oil_bias(i)
             if oil > 0.0:  # the oil anywhere in its band
                 low, high = low - oil, high + oil
-            u = float(undetectable[i]) if oil_moved else 0.0  # the healthy level's range
             if confirmed and named == i:
                 line = self.moving(i)
                 if line is not None:
