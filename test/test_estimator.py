@@ -187,7 +187,7 @@ def test_diagnostic_values_are_numbers_with_units_in_their_keys(table):
             continue
         float(text)  # every other value parses as a number (PlotJuggler graphs them)
         assert key in COUNTERS or key in ('level', 'last_alarm_level', 'efficiency',
-                                          'baseline_complete') or \
+                                          'baseline_complete', 'detection_held') or \
             key.endswith(('_nm', '_nm_s', '_pa', '_rad_s', '_m2_s', '_kg_m2', '_s', 'scale',
                           '_std', '_per_k'))
 

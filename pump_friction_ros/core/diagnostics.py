@@ -138,6 +138,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('baseline_learnt_s', mon.learner.learnt_s),
         ('baseline_learn_s', mon.settings.baseline_learn_s),
         ('baseline_complete', int(not mon.learning)),
+        ('detection_held', int(bool(mon.held))),  # waiting for the oil to settle
     ]
     fit = mon.baseline if mon.baseline is not None else mon.fit
     for name, value, std in zip(BASELINE_TERMS, fit.coefficients, fit.std(), strict=True):
@@ -179,6 +180,8 @@ def level_message(level: int, mon: WearMonitor) -> str:
     if level == OK:
         if mon.learning:
             return mon.baseline_status()
+        if mon.held:  # after a start or a pause without temperature topic
+            return mon.held
         note = mon.last_alarm.note()
         return 'torque as the healthy baseline' + (f'; {note}' if note else '')
     verdict, words = mon.verdict(1.0)

@@ -89,7 +89,8 @@ def oil_seen_moving(viscosity_assumed: bool, band_c: float, commissioning_restar
         ``oil_temperature_band_c`` [K]: where the installation states its band (> 0), the
         band bounds the oil instead (``oil_allowance``).
     commissioning_restarts : int
-        Times commissioning restarted because its halves disagreed (the pump was changing).
+        Times commissioning restarted because its halves disagreed (the pump was changing),
+        and holds after a start or a pause whose check did (``warm_up_hold``).
     follows : int
         Falls of friction the baseline has followed as the oil thinning (``oil_follow``).
 

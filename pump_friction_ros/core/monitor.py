@@ -46,7 +46,9 @@ is dropped), and each window mean is one measurement:
    topic a fall of a friction, as the isolation names it, is the oil thinning: the baseline
    follows it down instead of alarming (``oil_follow``); with it, a change that a drift of
    the torque measurement with T - T_0, reading high as the oil warms, explains clearly
-   better than any step is that drift, learnt instead (``gain_follow``).
+   better than any step is that drift, learnt instead (``gain_follow``). Without it, after
+   a start from a saved state or a pause of ``warm_up_pause_s`` the oil may be cold: the
+   change is not judged until it settles (``warm_up_hold``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
    zero, and the valve-plate and other friction scales relative to the healthy pump. The
    last alarm, its verdict with it, is kept after it clears (``last_alarm``).
@@ -70,6 +72,8 @@ from .monitor_report import MonitorReport
 from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
 from .oil_follow import OilFollow
+from .signatures import undetectable_change
+from .warm_up_hold import WarmUpHold
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
@@ -136,6 +140,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                                            config.baseline_settle_time_constant_s)
         self.isolation = FaultIsolation(attribution, viscosity_assumed)
         self._follow = OilFollow() if viscosity_assumed else None  # the oil thinning
+        self._hold = WarmUpHold(prior, config.baseline_learn_s, 0.5 * config.cusum_drift_nm,
+                                config.baseline_settle_time_constant_s,
+                                config.warm_up_pause_s) if viscosity_assumed else None
         self._gain_follow = None if viscosity_assumed else GainFollow(  # the drive's k_t
             config.torque_constant_drift_max_per_k, attribution.isolation_memory_s)
         self.reset()
@@ -151,6 +158,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         for follow in (self._follow, self._gain_follow):
             if follow is not None:
                 follow.reset()
+        if self._hold is not None:
+            self._hold.forget()
         self.isolation.reset()
         self.last_alarm = LastAlarm()  # kept after it clears; a repair forgets it
         self._reset_detection()
@@ -348,6 +357,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         d = e - baseline.predict(h)
         if self._gain_follow is not None:  # the measurement's drift learnt (``gain_follow``)
             d -= self._gain_follow.term_nm(sig, temperature, baseline.temperature_c)
+        if self._hold is not None and self._hold.holds(h, d, weight, duration, t_s):
+            self._publish_fit()  # (released: the oil may have been seen moving)
+            return  # after a start or a pause, the oil may be cold (``warm_up_hold``)
         prediction_var = baseline.prediction_var(h)
         var = baseline.window_var_nm2 / weight + prediction_var
         a = 1.0 - math.exp(-duration / self._tau)
@@ -426,6 +438,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         if self.commissioning.add(h, e_nm, weight, duration_s, t_s, temperature_c):
             self.baseline = self.fit  # (nothing followed: only `reset` leads back here)
             self._reset_detection()
+            if self._hold is not None:  # a pause is counted from the last window learnt
+                self._hold.reset(t_s)
         else:
             self._publish_fit()
 
@@ -449,34 +463,12 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self.isolation.bias.set_prior(self._undetectable)
 
     def _unseen(self, running_s: float) -> np.ndarray:
-        """
-        Return the undetectable change per cause, on the recent points, with the allowances.
-
-        A change delta of cause j moves d by delta s_j, and the CUSUM of every cause i by
-        z_i = s_i (delta s_j - m) / n_i: n_i the RMS of s_i over commissioning, m the margin
-        and allowances taken off d. On average over the recent points (the isolation's
-        memory: C the mean of s s^T over them, r_i = sqrt(C_ii) >= |mean s_i sign(s_j)|)
-        sum i stays at zero while delta < (k n_i + m r_i) / |C_ij|; the change goes unseen
-        while no sum moves: below the least of these. On commissioning's points the own
-        sum is the least (Cauchy-Schwarz); on a pump commissioned cold and now warm the
-        valve plate's film shear is a quarter of what it was, its own sum sees a sixteenth,
-        and the sums whose signatures did not shrink (drive loss, offset) see more.
-        """
+        """Return the undetectable change per cause, with the allowances' mean since."""
         margin = self._unseen_nm - self._k
         if running_s > 0.0:
             margin += (self._allowance_nm_s + self._gain_allowance_nm_s) / running_s
-        if not self._recent_s > 0.0:  # commissioning's points: C = diag(n^2), the own sum
-            return (self._k + margin) / self._norm
-        second = self._recent_s2 / self._recent_s
-        rms = np.sqrt(np.maximum(np.diag(second), 0.0))
-        sums = (self._k * self._norm + margin * rms)[:, None]  # (cause i's sum, change j)
-        seen = np.abs(second)
-        unseen = np.where(seen > 1e-12 * np.outer(rms, rms), sums / np.where(
-            seen > 0.0, seen, 1.0), np.inf)
-        # (a change that moves no sum at all goes unseen whatever its size: published as a
-        # million, not infinite)
-        least: np.ndarray = np.minimum(unseen.min(axis=0), _UNSEEN_CAP)
-        return least
+        return undetectable_change(self._k, self._norm, margin, self._recent_s2,
+                                   self._recent_s, _UNSEEN_CAP)
 
     def _publish_fit(self) -> None:
         """Publish the scales: the fit against the model while learning, then the change."""

@@ -37,6 +37,7 @@ if TYPE_CHECKING:
     from .gain_follow import GainFollow
     from .oil_allowance import OilAllowance
     from .oil_follow import OilFollow
+    from .warm_up_hold import WarmUpHold
 
 __all__ = ['MonitorReport']
 
@@ -52,6 +53,7 @@ class MonitorReport:
     _oil: OilAllowance | None
     _follow: OilFollow | None
     _gain_follow: GainFollow | None
+    _hold: WarmUpHold | None
 
     @property
     def residual_std_nm(self) -> float:
@@ -105,14 +107,22 @@ class MonitorReport:
         -------
         bool
             Without temperature topic and band, the oil was seen to move: commissioning
-            restarted (its halves disagreed) or the baseline followed a fall
+            restarted (its halves disagreed), so did the check after a start or a pause
+            (``warm_up_hold``), or the baseline followed a fall
             (`healthy_level.oil_seen_moving`).
 
         """
         band = self._oil.band_c if self._oil is not None else 0.0
         follows = self._follow.times if self._follow is not None else 0
-        return oil_seen_moving(self._follow is not None, band, self.commissioning.restarts,
-                               follows)
+        moved = self._hold.moved if self._hold is not None else 0
+        return oil_seen_moving(self._follow is not None, band,
+                               self.commissioning.restarts + moved, follows)
+
+    @property
+    def held(self) -> str:
+        """Return why the detection waits after a start or a pause, or '' (``warm_up_hold``)."""
+        return self._hold.status() if self._hold is not None and self.baseline is not None \
+            else ''
 
     @property
     def measurement_drift_per_k(self) -> float:

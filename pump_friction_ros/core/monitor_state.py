@@ -43,6 +43,7 @@ if TYPE_CHECKING:
     from .gain_follow import GainFollow
     from .last_alarm import LastAlarm
     from .oil_follow import OilFollow
+    from .warm_up_hold import WarmUpHold
 
 __all__ = ['ERROR', 'OK', 'WARN', 'MonitorPersistence', 'MonitorSettings', 'MonitorTrace']
 
@@ -74,6 +75,7 @@ class MonitorSettings:
     baseline_learn_s: float
     baseline_settle_time_constant_s: float
     torque_constant_drift_max_per_k: float
+    warm_up_pause_s: float
 
 
 class MonitorPersistence:
@@ -110,6 +112,7 @@ class MonitorPersistence:
 
     _follow: OilFollow | None
     _gain_follow: GainFollow | None
+    _hold: WarmUpHold | None
 
     @property
     def learner(self) -> BaselineLearner:
@@ -161,7 +164,8 @@ class MonitorPersistence:
                 'recent_running_s': self._recent_s,
                 **({'oil_follow': self._follow.state()} if self._follow is not None else {}),
                 **({'gain_follow': self._gain_follow.state()}
-                   if self._gain_follow is not None else {})}
+                   if self._gain_follow is not None else {}),
+                **({'warm_up_hold': self._hold.state()} if self._hold is not None else {})}
 
     def load_state_dict(self, state: dict[str, object]) -> None:
         """
@@ -205,6 +209,12 @@ class MonitorPersistence:
             self._gain_follow.reset()
             if self.baseline is not None and 'gain_follow' in state:
                 self._gain_follow.load(state['gain_follow'])  # type: ignore[arg-type]
+        if self._hold is not None:  # came later too: a file without it saw no oil move,
+            self._hold.forget()  # and how long ago its last window was is not known
+            if 'warm_up_hold' in state:
+                self._hold.load(state['warm_up_hold'])  # type: ignore[arg-type]
+            elif self.baseline is not None:
+                self._hold.arm('after a restart from a baseline file without its time')
         ewma, var, onset = (float(state[key]) for key in (  # type: ignore[arg-type]
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
         pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)

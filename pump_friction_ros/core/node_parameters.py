@@ -205,6 +205,12 @@ class EstimatorConfig:
         'change (an oil warm-up without temperature input): the drift between its halves, '
         'extrapolated over this time constant, must stay below half the CUSUM allowance [s]; '
         '0: the drift alone.', 0.0, 1e6)
+    warm_up_pause_s: float = _param(
+        120.0, 'viscosity_source parameter: after a pause in monitored running longer than '
+        "this (a restart too: the baseline file keeps the last window's time) the oil may be "
+        'colder than at commissioning: the change from the baseline is not judged until it '
+        "settles (the commissioning's check on it; docs/monitor.md) [s]; 0: never held.",
+        0.0, 1e6)
     oil_temperature_band_c: float = _param(
         0.0, "viscosity_source parameter: the oil temperature's swing from commissioning "
         '[K]; its friction change (oil_viscosity_40c/100c law) is not a change of the pump, '
