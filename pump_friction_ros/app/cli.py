@@ -430,9 +430,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('evaluate-monitor', help='scenario bank: false alarms, detection '
                        'delay, attribution and coverage of the wear monitor')
-    p.add_argument('--quick', action='store_true',
-                   help='the small bank of the test suite (default: the benchmark, >= 10 h '
-                   'of nominal running)')
+    p.add_argument('--quick', action='store_true', help='the small bank of the test suite '
+                   '(default: the benchmark, >= 10 h of nominal running)')
     p.add_argument('--workers', type=_bounded_int('--workers', 1, 1024),
                    default=os.cpu_count() or 1, metavar='N',
                    help='parallel processes (default: CPU count); same records for any N')
@@ -440,6 +439,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help='folder for records.csv, figures.json, table.md and PNG plots')
     p.add_argument('--seed', type=int, default=0, metavar='N', help='bank seed (default 0)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.add_argument('--next-morning', action='store_true', help="instead: the cold starts "
+                   "without temperature topic again a day later, from the first day's state")
     p.set_defaults(func=data_commands.cmd_evaluate_monitor)
 
     p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")

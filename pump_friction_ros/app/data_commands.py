@@ -159,4 +159,5 @@ def cmd_evaluate_monitor(args: argparse.Namespace) -> int:
     from ..evaluation.command import evaluate_monitor
 
     return evaluate_monitor(quick=args.quick, workers=args.workers, out=args.out,
-                            seed=args.seed, progress=not args.quiet)
+                            seed=args.seed, progress=not args.quiet,
+                            next_morning=args.next_morning)

@@ -119,6 +119,11 @@ class MonitorReport:
                                self.commissioning.restarts + moved, follows)
 
     @property
+    def hold_released_s(self) -> float:
+        """Return when the last hold after a start or a pause ended [s] (NaN: none)."""
+        return self._hold.released_s if self._hold is not None else math.nan
+
+    @property
     def held(self) -> str:
         """Return why the detection waits after a start or a pause, or '' (``warm_up_hold``)."""
         return self._hold.status() if self._hold is not None and self.baseline is not None \

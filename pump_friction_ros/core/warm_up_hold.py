@@ -31,20 +31,20 @@ in the baseline file; a replay from a baseline file learnt days before, by the h
 stamps; a clock that went back is taken as no pause: a bag made with another clock's
 zero, a simulation), the change from the baseline is not judged until it stops moving: its
 windows go to a check of their own, the commissioning's (`commissioning.Commissioning` on
-the change d instead of the residual: the fits of two halves of ``baseline_learn_s`` of
-monitored running must agree, the drift between them extrapolated over
-``baseline_settle_time_constant_s`` below half the CUSUM allowance, from the first check on:
-a start is a change until shown otherwise). Meanwhile the CUSUMs, the level and the isolation
-stay as they were (an alarm from before the start stands) and /diagnostics says why; a new
-pause starts the hold afresh, and a restart resumes it (`state`). A steady pump is released
-after ``baseline_learn_s`` of monitored running or a little more (its halves agree); a
-warming one once its friction has settled: the check assumes the slowest settling, so an
+the change d instead of the residual, over `CHECK_SPAN_RATIO` times ``baseline_learn_s`` of
+monitored running: the fits of its two halves must agree, the drift between them
+extrapolated over ``baseline_settle_time_constant_s`` below half the CUSUM allowance, from
+the first check on: a start is a change until shown otherwise). Meanwhile the CUSUMs, the
+level and the isolation stay as they were (an alarm from before the start stands) and
+/diagnostics says why; a new pause starts the hold afresh, and a restart resumes it
+(`state`). A steady pump is released after one check or a little more (its halves agree);
+a warming one once its friction has settled: the check assumes the slowest settling, so an
 oil warming faster is released when little of it is left to come, and one as slow at
 `HOLD_LIMIT_TIME_CONSTANTS` settle time constants of the node's time at the latest (with
-``baseline_settle_time_constant_s`` 0, the drift alone, at the first check). Wear that came with
-the start (or during the pause) is then judged as any change; a pump that settles warmer
-than the baseline follows the oil down; one that stays colder reads above it, `valve plate
-or oil viscosity`, which it may be. With the temperature topic the model follows the
+``baseline_settle_time_constant_s`` 0, the drift alone, at the first check). Wear that came
+with the start (or during the pause) is then judged as any change; a pump that settles
+warmer than the baseline follows the oil down; one that stays colder reads above it, `valve
+plate or oil viscosity`, which it may be. With the temperature topic the model follows the
 viscosity and nothing is held.
 """
 
@@ -56,13 +56,22 @@ import numpy as np
 
 from .commissioning import Commissioning
 
-__all__ = ['HOLD_LIMIT_TIME_CONSTANTS', 'WarmUpHold']
+__all__ = ['CHECK_SPAN_RATIO', 'HOLD_LIMIT_TIME_CONSTANTS', 'WarmUpHold']
+
+CHECK_SPAN_RATIO = 2.0
+"""The hold's check spans this many times ``baseline_learn_s`` of monitored running: its
+halves' fits are half as noisy in variance as the commissioning's and a warm-up's drift
+between them twice as large. (At 1, the noise of 15-s fits hid the tail of an ISO VG 32
+warm-up, 14 -> 59 degC with tau 884 s: the bank's seed 2, installation 2, the next morning,
+released at 1323 s with 22 % of the warm-up to come, WARN 363 s later; at 2 it is released
+at 1707 s and raises none. A steady pump waits 60 s of monitored running instead of 30.)"""
 
 HOLD_LIMIT_TIME_CONSTANTS = 5.0
 """The longest hold, in settle time constants of the node's time since the first held window:
 an exponential settling is 99.3 % done after five. (At three, 95 %, an ISO VG 46 oil warming
 from 20 to 50 degC with the settle time constant, 900 s, was released with 0.03-0.05 N m of
-its friction still to come and alarmed 240 s later: test_warm_up_hold.) A friction that
+its friction still to come and alarmed 240 s later: test_warm_up_hold, with a check over
+``baseline_learn_s`` alone.) A friction that
 still moves by then (an oil that swings, an intermittent fault) is judged as it is."""
 
 
@@ -75,7 +84,8 @@ class WarmUpHold:
     prior_std : tuple of float
         Prior standard deviation of each coefficient of the change's fit (the baseline's).
     learn_s : float
-        ``baseline_learn_s``: monitored running of the check, two halves [s].
+        ``baseline_learn_s`` [s]: the check spans `CHECK_SPAN_RATIO` times it of monitored
+        running, in two halves.
     tolerance_nm : float
         Largest drift still to come of a settled change [N m] (the commissioning's).
     settle_time_constant_s : float
@@ -89,11 +99,14 @@ class WarmUpHold:
 
     def __init__(self, prior_std: tuple[float, ...], learn_s: float, tolerance_nm: float,
                  settle_time_constant_s: float, pause_s: float) -> None:
-        self.check = Commissioning(prior_std, learn_s, tolerance_nm, settle_time_constant_s)
+        self.check = Commissioning(prior_std, CHECK_SPAN_RATIO * learn_s, tolerance_nm,
+                                   settle_time_constant_s)
         self.pause_s = pause_s
         self.limit_s = HOLD_LIMIT_TIME_CONSTANTS * settle_time_constant_s
         self.moved = 0
         """Holds whose change was seen moving (its check restarted): the oil moved."""
+        self.released_s = math.nan
+        """The time of the window that ended the last hold [s] (NaN: none since the start)."""
         self.reset()
 
     def reset(self, last_s: float = math.nan) -> None:
@@ -174,7 +187,7 @@ class WarmUpHold:
         if settled or (checked if not limit > 0.0 else not t_s - self._since_s < limit):
             if self.check.restarts > 1:
                 self.moved += 1  # it moved after the start: the oil (or a change) did
-            self.held = False
+            self.held, self.released_s = False, t_s
         return True
 
     def status(self) -> str:

@@ -19,6 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .bank import run_bank
+from .next_morning import format_next_mornings, run_next_mornings
 from .report import bank_figures, format_table, write_outputs
 from .settings import FULL, QUICK
 from ..progress import ProgressBar
@@ -27,9 +28,12 @@ __all__ = ['evaluate_monitor']
 
 
 def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | None = None,
-                     seed: int = 0, progress: bool = True) -> int:
+                     seed: int = 0, progress: bool = True, next_morning: bool = False) -> int:
     """
     Run the evaluation bank with the current monitor and print one table.
+
+    With ``next_morning``, instead: each installation of the cold start without temperature
+    topic, a second day from the first's state (``next_morning``), with and without the hold.
 
     Parameters
     ----------
@@ -43,6 +47,8 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
         Bank seed.
     progress : bool
         Progress bar on a terminal.
+    next_morning : bool
+        Run the next mornings (table and ``next_morning.md`` in ``out``) instead of the bank.
 
     Returns
     -------
@@ -51,6 +57,15 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
 
     """
     settings = QUICK if quick else FULL
+    if next_morning:
+        table = format_next_mornings(run_next_mornings(settings, [seed], workers), [seed])
+        print(table)
+        if out is not None:
+            path = Path(out) / 'next_morning.md'
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(table + '\n', encoding='utf-8')
+            print(path)
+        return 0
     with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
         result = run_bank(settings, workers=workers, seed=seed,
                           progress=lambda done, total: bar(done / total))
