@@ -86,7 +86,7 @@ def warming(mon, rng, t0, seconds, cold=COLD, wear=1.0, tau_s=TAU_S):
 @pytest.mark.parametrize(('seed', 'cold', 'tau_s'), [
     (31, COLD, TAU_S), (32, COLD, TAU_S), (33, COLD, TAU_S),
     (31, COLD, SETTLE_S),  # as slow as the settling waited for
-    (31, 1.2, SETTLE_S), (32, 1.2, SETTLE_S)])  # a cool oil: its first check alone passes
+    (31, 1.2, SETTLE_S), (32, 1.2, SETTLE_S)])  # a cool oil, as slow
 def test_a_cold_start_from_a_warm_baseline_waits_for_the_oil_and_raises_no_alarm(seed, cold,
                                                                                  tau_s):
     state, rng, t = warm_commissioned(seed)
@@ -111,6 +111,17 @@ def test_a_cold_start_from_a_warm_baseline_waits_for_the_oil_and_raises_no_alarm
     levels, held, _ = warming(again, np.random.default_rng(seed), t + 12 * 3600.0, 2400.0,
                               cold, tau_s=tau_s)
     assert max(levels) > OK and not any(held)
+
+
+@pytest.mark.parametrize('seed', [31, 32])
+def test_the_drift_is_extrapolated_from_the_first_check_on(seed):
+    # an oil only 1.1 times as viscous, as slow as the settling waited for: its drift
+    # between the first check's halves alone is within the tolerance (released at once,
+    # after 240 windows, when not extrapolated); a start is a change until shown otherwise
+    state, rng, t = warm_commissioned(seed)
+    mon = restarted(state)
+    levels, held, _ = warming(mon, rng, t + 12 * 3600.0, LIMIT_S, 1.1, tau_s=SETTLE_S)
+    assert max(levels) == OK and held.index('') + 1 > 240
 
 
 def test_wear_that_came_with_the_start_is_detected_once_the_oil_has_settled():

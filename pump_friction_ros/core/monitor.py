@@ -47,8 +47,9 @@ is dropped), and each window mean is one measurement:
    follows it down instead of alarming (``oil_follow``); with it, a change that a drift of
    the torque measurement with T - T_0, reading high as the oil warms, explains clearly
    better than any step is that drift, learnt instead (``gain_follow``). Without it, after
-   a start from a saved state or a pause of ``warm_up_pause_s`` the oil may be cold: the
-   change is not judged until it settles (``warm_up_hold``).
+   more than ``warm_up_pause_s`` without monitored running (a pause, a restart the next
+   morning) the oil may be cold: the change is not judged until it settles
+   (``warm_up_hold``).
 3. **Isolation** (``attribution``): which single change explains d since the CUSUM left
    zero, and the valve-plate and other friction scales relative to the healthy pump. The
    last alarm, its verdict with it, is kept after it clears (``last_alarm``).
