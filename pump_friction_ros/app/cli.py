@@ -439,7 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='folder for records.csv, figures.json, table.md and PNG plots')
     p.add_argument('--seed', type=int, default=0, metavar='N', help='bank seed (default 0)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
-    p.add_argument('--next-morning', action='store_true', help="instead: the cold starts "
+    p.add_argument('--next-morning', action='store_true', help='instead: the cold starts '
                    "without temperature topic again a day later, from the first day's state")
     p.set_defaults(func=data_commands.cmd_evaluate_monitor)
 
