@@ -27,6 +27,7 @@ from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.friction_bias import Z95
 from pump_friction_ros.core.inputs import InputKind
 from pump_friction_ros.core.monitor import OK
+from pump_friction_ros.evaluation import command as command_module
 from pump_friction_ros.evaluation.bank import (
     base_config,
     build_scenarios,
@@ -360,6 +361,60 @@ def test_quick_bank_end_to_end(quick, tmp_path):
 def test_command_line_hook(capsys):
     assert main(['evaluate-monitor', '--workers', '0']) == 2
     assert '--workers' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('command', [['evaluate-monitor'], ['make-sample-bags', '--out', 'x']])
+def test_a_negative_seed_is_a_usage_error_not_a_numpy_traceback(command, capsys):
+    assert main([*command, '--seed', '-1']) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and '--seed must be in [0, 4294967295], got -1' in err
+
+
+def _bank_must_not_run(*args, **kwargs):
+    raise AssertionError('the bank ran before its output was checked')
+
+
+@pytest.mark.parametrize('next_morning', [False, True])
+def test_a_bad_out_folder_fails_before_the_bank_runs(next_morning, tmp_path, monkeypatch,
+                                                     capsys):
+    monkeypatch.setattr(command_module, 'run_bank', _bank_must_not_run)
+    monkeypatch.setattr(command_module, 'run_next_mornings', _bank_must_not_run)
+    extra = ['--next-morning'] if next_morning else []
+    a_file = tmp_path / 'a_file'
+    a_file.write_text('mine\n')
+    under_a_file = a_file / 'bank'
+    mine = tmp_path / 'mine'
+    mine.mkdir()
+    (mine / 'notes.txt').write_text('mine\n')
+    for out, force, message in [(a_file, False, 'output exists'),
+                                (a_file, True, 'is a file, expected a folder'),
+                                (under_a_file, False, 'is not a folder'),
+                                (mine, True, 'does not look like an earlier output')]:
+        args = ['evaluate-monitor', '--quiet', '--out', str(out), *extra]
+        assert main(args + ['--force'] * force) == 2
+        err = capsys.readouterr().err
+        assert err.count('\n') == 1 and message in err and str(out) in err
+    assert a_file.read_text() == 'mine\n' and sorted(p.name for p in mine.iterdir()) == [
+        'notes.txt']
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['a_file', 'mine']  # no staging
+
+
+def test_the_out_folder_is_written_whole_and_replaced_only_with_force(quick, tmp_path,
+                                                                      monkeypatch, capsys):
+    monkeypatch.setattr(command_module, 'run_bank', lambda *args, **kwargs: quick)
+    out = tmp_path / 'runs' / 'bank'
+    assert main(['evaluate-monitor', '--quiet', '--out', str(out)]) == 0
+    printed = capsys.readouterr().out
+    names = sorted(p.name for p in out.iterdir())
+    assert {'records.csv', 'figures.json', 'table.md'} <= set(names)
+    assert all(str(out / name) in printed for name in names)  # the paths where they lie
+    assert sorted(p.name for p in out.parent.iterdir()) == ['bank']  # no staging left
+    table = (out / 'table.md').read_text()
+    assert main(['evaluate-monitor', '--quiet', '--out', str(out)]) == 2
+    assert 'output exists' in capsys.readouterr().err
+    (out / 'table.md').write_text('older\n')
+    assert main(['evaluate-monitor', '--quiet', '--out', str(out), '--force']) == 0
+    assert (out / 'table.md').read_text() == table
 
 
 def test_the_bank_imports_no_ros():

@@ -17,19 +17,20 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 import json
 import math
 import os
 from pathlib import Path
 import sys
-from typing import Any, NoReturn, TYPE_CHECKING
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import data_commands
+from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
-from ..errors import PumpFrictionError, UsageError
+from ..errors import PumpFrictionError
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
 from ..physics.units import (
@@ -51,56 +52,9 @@ MAX_PRESSURE_BAR = 2_000.0
 MAX_VISCOSITY_CST = 10_000.0
 
 
-class _Parser(argparse.ArgumentParser):
-    """
-    Argument parser that reports a bad argument in one line and exits with code 2.
-
-    Abbreviations are off (``allow_abbrev=False``) for the main parser and every
-    sub-command, so that a typo such as ``--plot`` for ``--plots`` is an error instead of
-    a guess.
-    """
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs['allow_abbrev'] = False
-        super().__init__(*args, **kwargs)
-
-    def error(self, message: str) -> NoReturn:
-        """Raise `UsageError` instead of printing usage and exiting."""
-        raise UsageError(f'{message} (see {self.prog} --help)')
-
-
-def _bounded_float(name: str, low: float, high: float) -> Callable[[str], float]:
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f'{name} must be a number, got {text!r}') from None
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f'{name} must be finite, got {text!r}')
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f'{name} must be in [{low:g}, {high:g}], '
-                                             f'got {value:g}')
-        return value
-
-    return parse
-
-
-def _bounded_int(name: str, low: int, high: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f'{name} must be an integer, got {text!r}') from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f'{name} must be in [{low}, {high}], got {value}')
-        return value
-
-    return parse
-
-
-_speed = _bounded_float('--speed-rpm', -MAX_SPEED_RPM, MAX_SPEED_RPM)
-_pressure = _bounded_float('--pressure-bar', -MAX_PRESSURE_BAR, MAX_PRESSURE_BAR)
-_viscosity = _bounded_float('--viscosity-cst', 1e-3, MAX_VISCOSITY_CST)
+_speed = bounded_float('--speed-rpm', -MAX_SPEED_RPM, MAX_SPEED_RPM)
+_pressure = bounded_float('--pressure-bar', -MAX_PRESSURE_BAR, MAX_PRESSURE_BAR)
+_viscosity = bounded_float('--viscosity-cst', 1e-3, MAX_VISCOSITY_CST)
 
 
 def _json_number(value: float) -> float | None:
@@ -321,9 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
         Parser with one sub-command per job.
 
     """
-    parser = _Parser(prog='pump_friction',
-                     description='Bent-axis pump friction model (Hong & Doh 2004).')
-    sub = parser.add_subparsers(dest='command', required=True, parser_class=_Parser)
+    parser = Parser(prog='pump_friction',
+                    description='Bent-axis pump friction model (Hong & Doh 2004).')
+    sub = parser.add_subparsers(dest='command', required=True, parser_class=Parser)
 
     p = sub.add_parser('paper-check', help="the paper's numbers next to the model's")
     _add_pump(p)
@@ -346,11 +300,11 @@ def build_parser() -> argparse.ArgumentParser:
     _add_pump(p)
     p.add_argument('--out', metavar='FILE', default=None,
                    help='output .npz (default: the cache used when no table is given)')
-    p.add_argument('--max-speed-rpm', type=_bounded_float('--max-speed-rpm', 100.0,
-                                                          MAX_SPEED_RPM), default=12000.0,
+    p.add_argument('--max-speed-rpm', type=bounded_float('--max-speed-rpm', 100.0,
+                                                         MAX_SPEED_RPM), default=12000.0,
                    metavar='N', help='speed envelope [rpm] (default 12000)')
-    p.add_argument('--max-pressure-bar', type=_bounded_float('--max-pressure-bar', 1.0,
-                                                             MAX_PRESSURE_BAR), default=350.0,
+    p.add_argument('--max-pressure-bar', type=bounded_float('--max-pressure-bar', 1.0,
+                                                            MAX_PRESSURE_BAR), default=350.0,
                    metavar='P', help='pressure-difference envelope [bar] (default 350)')
     p.add_argument('--viscosity-cst', type=_viscosity, nargs=2, default=None,
                    metavar=('LOW', 'HIGH'),
@@ -404,8 +358,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('make-sample-bags', help='write the simulated sample bags')
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')
-    p.add_argument('--seed', type=int, default=0, metavar='N', help='random seed (default 0)')
-    p.add_argument('--duration-s', type=_bounded_float('--duration-s', 1.0, 86400.0),
+    p.add_argument('--seed', type=SEED, default=0, metavar='N', help='random seed (default 0)')
+    p.add_argument('--duration-s', type=bounded_float('--duration-s', 1.0, 86400.0),
                    default=75.0, metavar='S', help='length of each bag [s] (default 75)')
     _add_pump(p)
     p.set_defaults(func=data_commands.cmd_make_sample_bags)
@@ -432,12 +386,14 @@ def build_parser() -> argparse.ArgumentParser:
                        'delay, attribution and coverage of the wear monitor')
     p.add_argument('--quick', action='store_true', help='the small bank of the test suite '
                    '(default: the benchmark, >= 10 h of nominal running)')
-    p.add_argument('--workers', type=_bounded_int('--workers', 1, 1024),
+    p.add_argument('--workers', type=bounded_int('--workers', 1, 1024),
                    default=os.cpu_count() or 1, metavar='N',
                    help='parallel processes (default: CPU count); same records for any N')
     p.add_argument('--out', metavar='DIR', default=None,
                    help='folder for records.csv, figures.json, table.md and PNG plots')
-    p.add_argument('--seed', type=int, default=0, metavar='N', help='bank seed (default 0)')
+    p.add_argument('--force', action='store_true',
+                   help="replace an existing --out folder of this command's outputs")
+    p.add_argument('--seed', type=SEED, default=0, metavar='N', help='bank seed (default 0)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.add_argument('--next-morning', action='store_true', help='instead: the cold starts '
                    "without temperature topic again a day later, from the first day's state")

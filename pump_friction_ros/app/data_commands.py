@@ -160,4 +160,4 @@ def cmd_evaluate_monitor(args: argparse.Namespace) -> int:
 
     return evaluate_monitor(quick=args.quick, workers=args.workers, out=args.out,
                             seed=args.seed, progress=not args.quiet,
-                            next_morning=args.next_morning)
+                            next_morning=args.next_morning, force=args.force)

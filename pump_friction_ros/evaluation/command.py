@@ -23,12 +23,36 @@ from .next_morning import format_next_mornings, run_next_mornings
 from .report import bank_figures, format_table, write_outputs
 from .settings import FULL, QUICK
 from ..progress import ProgressBar
+from ..staging import Staged, StagedOutputs
 
-__all__ = ['evaluate_monitor']
+__all__ = ['EVALUATION_FILES', 'evaluate_monitor', 'looks_like_evaluation']
+
+EVALUATION_FILES = ('records.csv', 'figures.json', 'table.md', 'next_morning.md')
+"""What an ``--out`` folder of this command holds, besides its PNG plots."""
+
+
+def looks_like_evaluation(path: Path) -> bool:
+    """
+    Return whether an existing folder holds only an earlier evaluation's outputs.
+
+    Parameters
+    ----------
+    path : Path
+        The folder.
+
+    Returns
+    -------
+    bool
+        Every entry a file named in `EVALUATION_FILES` or a PNG plot.
+
+    """
+    return all(p.is_file() and (p.name in EVALUATION_FILES or p.suffix == '.png')
+               for p in path.iterdir())
 
 
 def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | None = None,
-                     seed: int = 0, progress: bool = True, next_morning: bool = False) -> int:
+                     seed: int = 0, progress: bool = True, next_morning: bool = False,
+                     force: bool = False) -> int:
     """
     Run the evaluation bank with the current monitor and print one table.
 
@@ -42,37 +66,59 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     workers : int
         Worker processes.
     out : str or Path, optional
-        Folder for records.csv, figures.json, table.md and the PNG plots.
+        Folder for records.csv, figures.json, table.md and the PNG plots: checked and made
+        before the bank runs, written under a temporary name and moved into place at the
+        end (``staging``), so that a bad path fails at once and an interrupted run leaves
+        nothing that looks complete.
     seed : int
         Bank seed.
     progress : bool
         Progress bar on a terminal.
     next_morning : bool
         Run the next mornings (table and ``next_morning.md`` in ``out``) instead of the bank.
+    force : bool
+        Replace an existing ``out`` folder that holds an earlier evaluation's outputs.
 
     Returns
     -------
     int
         Exit code 0.
 
+    Raises
+    ------
+    OutputError
+        ``out`` exists (without ``force``), is not such a folder, or cannot be made.
+
     """
     settings = QUICK if quick else FULL
-    if next_morning:
-        table = format_next_mornings(run_next_mornings(settings, [seed], workers), [seed])
+    outputs = StagedOutputs()
+    try:
+        staged = None if out is None else outputs.add(out, force, True,
+                                                      looks_like=looks_like_evaluation)
+        if next_morning:
+            table = format_next_mornings(run_next_mornings(settings, [seed], workers), [seed])
+            print(table)  # (printed before it is written: a failed write loses nothing)
+            if staged is not None:
+                (staged.path / 'next_morning.md').write_text(table + '\n', encoding='utf-8')
+                _commit(outputs, staged, ['next_morning.md'])
+            return 0
+        with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
+            result = run_bank(settings, workers=workers, seed=seed,
+                              progress=lambda done, total: bar(done / total))
+        figures = bank_figures(result.records)
+        table = format_table(figures, result)
         print(table)
-        if out is not None:
-            path = Path(out) / 'next_morning.md'
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(table + '\n', encoding='utf-8')
-            print(path)
-        return 0
-    with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
-        result = run_bank(settings, workers=workers, seed=seed,
-                          progress=lambda done, total: bar(done / total))
-    figures = bank_figures(result.records)
-    table = format_table(figures, result)
-    print(table)
-    if out is not None:
-        for path in write_outputs(result, figures, table, Path(out)):
-            print(path)
+        if staged is not None:
+            written = write_outputs(result, figures, table, staged.path)
+            _commit(outputs, staged, [path.name for path in written])
+    except BaseException:
+        outputs.discard()
+        raise
     return 0
+
+
+def _commit(outputs: StagedOutputs, staged: Staged, names: list[str]) -> None:
+    """Move the staged folder into place and print the files written, at their place."""
+    outputs.commit()
+    for name in names:
+        print(staged.target / name)
