@@ -178,6 +178,9 @@ BAD = {
     'learn_missing_bag': lambda tmp: ['learn-baseline', tmp / 'nope', '--out', tmp / 'b.yaml'],
     'learn_out_exists': lambda tmp: ['learn-baseline', NOMINAL, '--out', SAMPLE_PARAMS],
     'learn_out_folder': lambda tmp: ['learn-baseline', NOMINAL, '--out', tmp],
+    # (a folder that cannot be made: refused before the bag is replayed, which prints)
+    'learn_out_unwritable': lambda tmp: ['learn-baseline', NOMINAL, '--out',
+                                         Path(SAMPLE_PARAMS) / 'b.yaml'],
     'learn_bad_start': lambda tmp: ['learn-baseline', NOMINAL, '--out', tmp / 'b.yaml',
                                     '--baseline', SAMPLE_PARAMS],
     'reset_missing': lambda tmp: ['reset-baseline', tmp / 'nope.yaml'],

@@ -147,6 +147,23 @@ def test_plot_writes_labelled_png_figures(capsys, tmp_path):
         assert width > 400 and height > 300
 
 
+def test_plot_replaces_an_earlier_folder_only_with_force_and_refuses_a_file(capsys, tmp_path):
+    figs = tmp_path / 'figs'
+    figs.mkdir()
+    (figs / 'fig03_old.png').write_bytes(b'old')
+    code, _, err = run(capsys, 'plot', '--out', str(figs))
+    assert code == 2 and 'output exists' in err and (figs / 'fig03_old.png').exists()
+    assert run(capsys, 'plot', '--out', str(figs), '--force')[0] == 0
+    assert not (figs / 'fig03_old.png').exists() and len(list(figs.glob('*.png'))) == 10
+    a_file = tmp_path / 'a_file'
+    a_file.write_text('mine\n')
+    for args in (['--out', str(a_file), '--force'], ['--out', str(a_file / 'figs')]):
+        code, out, err = run(capsys, 'plot', *args)
+        assert code == 2 and out == '' and err.count('\n') == 1 and str(a_file) in err
+    assert a_file.read_text() == 'mine\n'
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['a_file', 'figs']  # no staging
+
+
 def test_build_table_then_torque_from_table_matches_the_model(capsys, tmp_path):
     out = tmp_path / 'tab.npz'
     code, text, _ = run(capsys, 'build-table', '--out', str(out), '--quiet')

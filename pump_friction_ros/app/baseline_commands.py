@@ -90,6 +90,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         provenance_differences,
         read_baseline,
         restore_baseline,
+        writable_folder,
         write_baseline,
     )
     from ..core.estimator import estimator_from_config
@@ -99,6 +100,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         raise OutputError(f'--out {out} is a folder; give the baseline file')
     if out.exists() and not args.force:
         raise OutputError(f'--out {out} exists (--force replaces it)')
+    writable_folder(out)  # before the bags are replayed: a bad path fails at once
     config = estimator_config(args)
     remaps = parse_remaps(args.topic_remap)
     bags = discover_bags(args.bags)

@@ -21,7 +21,6 @@ from collections.abc import Sequence
 import json
 import math
 import os
-from pathlib import Path
 import sys
 from typing import TYPE_CHECKING
 
@@ -246,10 +245,19 @@ def _cmd_kinematics(args: argparse.Namespace) -> int:
 
 def _cmd_plot(args: argparse.Namespace) -> int:
     from .model_figures import write_model_figures
+    from ..staging import looks_like_plots, StagedOutputs
 
     model = _model(args)
-    for path in write_model_figures(model, Path(args.out)):
-        print(path)
+    outputs = StagedOutputs()
+    try:  # the folder checked and made first, moved into place whole
+        staged = outputs.add(args.out, args.force, True, looks_like=looks_like_plots)
+        names = [path.name for path in write_model_figures(model, staged.path)]
+        outputs.commit()
+    except BaseException:
+        outputs.discard()
+        raise
+    for name in names:
+        print(staged.target / name)
     return 0
 
 
@@ -401,6 +409,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")
     p.add_argument('--out', required=True, metavar='DIR', help='output folder')
+    p.add_argument('--force', action='store_true', help='replace an earlier --out folder of '
+                   'PNG figures')
     _add_pump(p)
     p.set_defaults(func=_cmd_plot)
     return parser

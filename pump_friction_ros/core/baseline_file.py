@@ -53,7 +53,7 @@ if TYPE_CHECKING:
 __all__ = ['BASELINE_FORMAT', 'BASELINE_FORMAT_VERSION', 'PROVENANCE_PARAMETERS',
            'archive_baseline', 'baseline_document', 'load_baseline', 'provenance',
            'provenance_differences', 'read_baseline', 'restore_baseline', 'table_fingerprint',
-           'utc_now', 'write_baseline']
+           'utc_now', 'writable_folder', 'write_baseline']
 
 BASELINE_FORMAT = 'pump_friction_ros healthy baseline'
 BASELINE_FORMAT_VERSION = 1
@@ -275,6 +275,31 @@ def write_baseline(path: Path, document: dict[str, Any]) -> None:
             Path(tmp).unlink(missing_ok=True)
             raise
         _fsync_folder(path.parent)
+    except OSError as exc:
+        raise OutputError(f'cannot write baseline file {path}: '
+                          f'{exc.strerror or type(exc).__name__}') from None
+
+
+def writable_folder(path: Path) -> None:
+    """
+    Check that `write_baseline` can write ``path``: its folder made, a file made in it.
+
+    Parameters
+    ----------
+    path : Path
+        The baseline file to be written.
+
+    Raises
+    ------
+    OutputError
+        It cannot (one line, with the reason, as `write_baseline` would say it).
+
+    """
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.probe', dir=path.parent)
+        os.close(fd)
+        os.unlink(tmp)
     except OSError as exc:
         raise OutputError(f'cannot write baseline file {path}: '
                           f'{exc.strerror or type(exc).__name__}') from None
