@@ -444,6 +444,30 @@ def test_sample_bags_are_reproducible_from_their_seed(tmp_path, monkeypatch_modu
         make_sample_bags(tmp_path / 'a', seed=3, duration_s=2.0)
 
 
+def test_sample_bags_are_written_all_or_none(tmp_path, monkeypatch):
+    from pump_friction_ros.errors import OutputError
+    from pump_friction_ros.sim import sample_bags
+
+    real, calls = sample_bags.simulate_duty_cycle, []
+
+    def fail_on_the_second_bag(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # Ctrl-C while the wear bag is simulated
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(sample_bags, 'simulate_duty_cycle', fail_on_the_second_bag)
+    out = tmp_path / 'bags'
+    with pytest.raises(KeyboardInterrupt):
+        make_sample_bags(out, seed=3, duration_s=1.0)
+    assert len(calls) == 2 and not out.exists()  # not the first bag alone, nor its folder
+    a_file = tmp_path / 'a_file'
+    a_file.write_text('mine\n')
+    with pytest.raises(OutputError, match='a_file is not a folder'):
+        make_sample_bags(a_file / 'bags', seed=3, duration_s=1.0)
+    assert len(calls) == 2  # refused before anything was simulated
+
+
 def test_shipped_sample_bags_replay_as_documented():
     """The figures for the sample bags, parsed from their page, docs/replay.md."""
     import re

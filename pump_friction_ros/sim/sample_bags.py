@@ -25,6 +25,7 @@ from .duty_cycle import DutyCycle, simulate_duty_cycle, SimulatedRun, wear_step
 from ..core.node_parameters import BAG_PARAMS_FILE, EstimatorConfig
 from ..errors import BagError
 from ..physics.pump_parameters import load_pump
+from ..staging import StagedOutputs
 from ..table.table_files import cached_table
 
 __all__ = ['SAMPLE_BAGS', 'SAMPLE_PARAMS_FILE', 'make_sample_bags', 'sample_params_text',
@@ -164,7 +165,9 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
     Parameters
     ----------
     out_dir : str or Path
-        Folder for the bags (created); the bags themselves must not exist.
+        Folder for the bags (created); the bags themselves must not exist. They are
+        written under temporary names and moved into place together at the end
+        (``staging``): an interrupted or failed run leaves none.
     seed : int
         Random seed: the same seed gives the same signals.
     pump_file : str, optional
@@ -185,15 +188,23 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
     for target in targets:
         if target.exists():
             raise BagError(f'output exists: {target} (remove it or choose another --out)')
-    out_dir.mkdir(parents=True, exist_ok=True)
-    table = cached_table(load_pump(pump_file))
-    cycle = DutyCycle(duration_s=duration_s)
-    written = []
-    for k, (name, (storage, worn)) in enumerate(SAMPLE_BAGS.items()):
-        wear = wear_step(WEAR_START_S, WEAR_SCALE, WEAR_RAMP_S) if worn else None
-        run = simulate_duty_cycle(table, cycle, seed=seed * 1000 + k, wear=wear)
-        written.append(write_run(run, out_dir / name, storage))
-        # the simulated installation's parameters travel with each bag (BAG_PARAMS_FILE)
-        (out_dir / name / BAG_PARAMS_FILE).write_text(sample_params_text(cycle, pump_file))
-    (out_dir / SAMPLE_PARAMS_FILE).write_text(sample_params_text(cycle, pump_file))
-    return written
+    outputs = StagedOutputs()  # checked and made first; moved into place together at the end
+    try:
+        bags = [outputs.add(out_dir / name, False, True, create=False) for name in SAMPLE_BAGS]
+        params = outputs.add(out_dir / SAMPLE_PARAMS_FILE, False, False)
+        table = cached_table(load_pump(pump_file))
+        cycle = DutyCycle(duration_s=duration_s)
+        text = sample_params_text(cycle, pump_file)
+        for k, (staged, (storage, worn)) in enumerate(zip(bags, SAMPLE_BAGS.values(),
+                                                          strict=True)):
+            wear = wear_step(WEAR_START_S, WEAR_SCALE, WEAR_RAMP_S) if worn else None
+            run = simulate_duty_cycle(table, cycle, seed=seed * 1000 + k, wear=wear)
+            write_run(run, staged.path, storage)
+            # the simulated installation's parameters travel with each bag (BAG_PARAMS_FILE)
+            (staged.path / BAG_PARAMS_FILE).write_text(text)
+        params.path.write_text(text)
+        outputs.commit()
+    except BaseException:
+        outputs.discard()
+        raise
+    return [staged.target for staged in bags]
