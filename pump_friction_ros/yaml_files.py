@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+import re
 from typing import Any
 
 import yaml
@@ -24,6 +25,24 @@ import yaml
 from .errors import ConfigError
 
 __all__ = ['read_yaml']
+
+
+class _Loader(yaml.SafeLoader):
+    """
+    PyYAML's safe loader, reading a plain ``1e-3`` as a number, as ROS 2 does.
+
+    PyYAML follows YAML 1.1, where a float needs a dot: ``1e-3`` is the string '1e-3'. ROS 2
+    reads a parameters file with ``rcl_yaml_param_parser``, which takes any unquoted scalar
+    that ``strtod`` reads whole as a double (``parse.c``, ``get_value``); so must this
+    package, or a file that ``ros2 launch`` accepts is refused by ``pump_friction replay``.
+    A quoted '1e-3' stays a string in both.
+    """
+
+
+_Loader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$'),
+    list('-+0123456789.'))
 
 
 def read_yaml(path: Path, what: str) -> Any:
@@ -40,7 +59,8 @@ def read_yaml(path: Path, what: str) -> Any:
     Returns
     -------
     Any
-        The parsed content (PyYAML's safe loader: plain data, no objects).
+        The parsed content (PyYAML's safe loader: plain data, no objects; a plain ``1e-3``
+        a number, as ROS 2 reads it).
 
     Raises
     ------
@@ -50,7 +70,7 @@ def read_yaml(path: Path, what: str) -> Any:
 
     """
     try:
-        return yaml.safe_load(path.read_text(encoding='utf-8'))
+        return yaml.load(path.read_text(encoding='utf-8'), Loader=_Loader)  # (safe: plain data)
     except FileNotFoundError:
         raise ConfigError(f'{what} not found: {path}') from None
     except (OSError, UnicodeDecodeError) as exc:

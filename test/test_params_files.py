@@ -85,6 +85,21 @@ def test_later_params_files_override_earlier_ones_parameter_by_parameter(tmp_pat
         load_estimator_config([a, bad])
 
 
+def test_a_plain_exponent_without_a_dot_is_a_number_as_ros_2_reads_it(tmp_path):
+    # rcl_yaml_param_parser takes an unquoted 1e-2 as a double (strtod); YAML 1.1, PyYAML's,
+    # reads it as the string '1e-2' and the file ros2 launch accepts was refused
+    path = tmp_path / 'exp.yaml'
+    path.write_text('torque_estimator:\n  ros__parameters:\n    cusum_drift_nm: 3e-2\n'
+                    '    warm_up_pause_s: 2E2\n    stale_timeout_s: .5e0\n')
+    config = load_estimator_config(path)
+    assert (config.cusum_drift_nm, config.warm_up_pause_s, config.stale_timeout_s) == (
+        0.03, 200.0, 0.5)
+    quoted = tmp_path / 'quoted.yaml'  # quoted, a string in ROS 2 too
+    quoted.write_text("torque_estimator:\n  ros__parameters:\n    cusum_drift_nm: '3e-2'\n")
+    with pytest.raises(ConfigError, match=r"cusum_drift_nm: expected a number, got '3e-2'"):
+        load_estimator_config(quoted)
+
+
 def test_relative_pump_file_resolves_against_the_current_directory_and_says_so(
         tmp_path, monkeypatch):
     (tmp_path / 'out').mkdir()
