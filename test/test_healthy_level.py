@@ -14,6 +14,8 @@
 
 """Without the temperature, the healthy level now is known within the unseen change."""
 
+import math
+
 import numpy as np
 from pump_friction_ros.core.attribution import Verdict
 from pump_friction_ros.core.baseline import baseline_regressors
@@ -41,10 +43,31 @@ def test_the_interval_over_an_unseen_healthy_level_holds_every_ratio_and_no_more
     assert with_unseen_level(low, high, 0.0) == (low, high)
 
 
-def test_an_unseen_change_of_the_whole_level_leaves_the_scale_unbounded_above():
-    lo, hi = with_unseen_level(-0.1, 0.1, 1.0)
-    assert lo == pytest.approx(0.9 / 2.0 - 1.0)
-    assert hi > 1e5
+@pytest.mark.parametrize('unseen', [1.0, 1.3])
+def test_an_unseen_change_of_the_whole_level_leaves_the_scale_unbounded_above(unseen):
+    # a healthy level that may be nothing: no upper end (not a reading over almost zero)
+    lo, hi = with_unseen_level(-0.1, 0.1, unseen)
+    assert lo == pytest.approx(0.9 / (1.0 + unseen) - 1.0) and hi == math.inf
+
+
+@pytest.mark.parametrize('case', ['no change', 'valve_plate'])
+def test_a_scale_whose_healthy_level_may_be_nothing_reads_as_read_with_an_infinite_std(case):
+    # seen on the bank's cold start without topic, seed 3: the valve plate's undetectable
+    # change above 1 on thin oil was published as 1 +- 1e6 (and a named one would have read
+    # the middle of [c, 1e6 c]: some 5e5)
+    mon = _state(case)
+    confirmed = mon.level != OK
+    assert confirmed == (case == 'valve_plate')
+    unseen = mon._undetectable.copy()
+    unseen[0] = 1.2
+    vp, vp_std, other, other_std = mon.isolation.scales(mon.baseline, unseen, confirmed, True)
+    assert vp_std == math.inf
+    if confirmed:  # the change as read (a valve plate x1.8)
+        assert vp == pytest.approx(1.0 + mon.isolation.friction_change(0)[0], rel=1e-12)
+        assert 1.5 < vp < 2.2
+    else:
+        assert vp == 1.0
+    assert math.isfinite(other) and math.isfinite(other_std)  # its own level is known
 
 
 @pytest.mark.parametrize(('assumed', 'band', 'restarts', 'follows', 'expected'), [

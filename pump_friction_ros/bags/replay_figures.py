@@ -137,8 +137,8 @@ def write_replay_figures(series: dict[str, list[float]], out_dir: Path, title: s
                                                              'other components')):
         scale, std = d[f'{key}_scale'], d[f'{key}_scale_std']
         ax.plot(t, scale, color=colour, label=f'{label} friction scale')
-        ax.fill_between(t, scale - 1.96 * std, scale + 1.96 * std, color=colour, alpha=0.2,
-                        label='95 % band')
+        band = np.clip([scale - 1.96 * std, scale + 1.96 * std], -1e3, 1e3)  # std inf: no end
+        ax.fill_between(t, band[0], band[1], color=colour, alpha=0.2, label='95 % band')
     ax.axhline(1.0, color='k', ls=':', lw=0.8)
     shade(ax)
     learnt = d['vp_scale_std'] < 0.5 * config.scale_prior_std  # past the start-up

@@ -74,10 +74,9 @@ from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
 from .friction_choice import choose_friction
 from .healthy_level import interval, with_unseen_level
-from .signatures import signature_matrix
+from .signatures import signature_matrix  # (the isolation's: exported here)
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
-# (signature_matrix lives in signatures; it is the isolation's, exported here)
 
 CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torque_offset',
           'drive_loss')
@@ -126,11 +125,9 @@ def _evidence(stats: ChangeStats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return T_j, delta_j and its std on these sums (`FaultIsolation.evidence`)."""
     gjj = np.diag(stats.g)
     ok = gjj > 0.0
-    safe = np.where(ok, gjj, 1.0)
-    t = stats.glr()
+    safe, t = np.where(ok, gjj, 1.0), stats.glr()
     # an F-test rather than a chi-square: the noise scaled by how badly even the best
-    # single cause fits (systematic model error is not white noise)
-    inflation = stats.lack_of_fit()
+    inflation = stats.lack_of_fit()  # single cause fits (model error is not white noise)
     delta = np.where(ok, stats.b / safe, math.nan)
     std = np.where(ok, np.sqrt(inflation / safe), math.nan)
     return t / inflation, delta, std
@@ -385,7 +382,8 @@ class FaultIsolation:
         line's) first moves out by what an oil anywhere in the band moves it
         (`ChangeStats.oil_bias`): the reading is the valve plate's or the oil's, and the
         interval must hold the valve plate's. Where no band is stated and the oil was seen
-        to move (``oil_moved``), every interval holds each healthy level within ``undetectable``.
+        to move (``oil_moved``), every interval holds each healthy level within ``undetectable``
+        (at >= 1, a level that may be nothing: the change as read, std ``inf``).
 
         Parameters
         ----------
@@ -429,6 +427,7 @@ class FaultIsolation:
             oil, oil_now = self.stats.oil_bias(i)
             if oil > 0.0:  # the oil anywhere in its band
                 low, high = low - oil, high + oil
+            point = change  # published (std inf) where the range has no upper end
             if confirmed and named == i:
                 line = self.moving(i)
                 if line is not None:
@@ -442,8 +441,9 @@ class FaultIsolation:
             else:  # no change confirmed: 1, +- whatever might be there
                 half = max(-low, high, float(undetectable[i]))
                 high = with_unseen_level(-half, half, u)[1]
-                low = -high
-            out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95]
+                low, point = -high, 0.0
+            out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95] if math.isfinite(
+                high) else [1.0 + point, math.inf]  # healthy level unknown: no upper end
         return out[0], out[1], out[2], out[3]
 
     def state(self) -> dict[str, object]:

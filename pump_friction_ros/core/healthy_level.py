@@ -28,7 +28,9 @@ from the baseline by any change the detection does not see, u = ``undetectable_c
 larger one would have raised an alarm, or been followed. The reading c (relative change from
 the baseline) is then that of (1 + w)(1 + b) - 1: the wear w over the healthy pump now, times
 the unseen oil b, |b| <= u. So 1 + w lies in [(1 + c_lo) / (1 + u), (1 + c_hi) / (1 - u)]
-(`with_unseen_level`).
+(`with_unseen_level`), unbounded above where u >= 1: the scale is then published as read
+with a std of ``inf`` (thin oil on the bank's cold start without temperature topic, seed 3,
+left the valve plate's u at 1.0-1.1).
 
 Measured on the bank's cold start without temperature topic (seed 2, installation 0): the
 oil warmed 4.5 K (VG 46, 54.2 -> 58.6 degC: its viscosity x0.85) between the baseline and the
@@ -48,9 +50,6 @@ from .friction_bias import Z95
 
 __all__ = ['interval', 'oil_seen_moving', 'with_unseen_level']
 
-_LEAST_DIVISOR = 1e-6
-"""The least healthy level (1 - u) divided by: an unseen change of the whole friction or
-more leaves the scale unbounded above (published as a million times the reading)."""
 
 
 def interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
@@ -120,12 +119,15 @@ def with_unseen_level(low: float, high: float, unseen: float) -> tuple[float, fl
     tuple of float
         (1 + low) / (1 + unseen) - 1 and (1 + high) / (1 - unseen) - 1 [-]: the interval
         holds it for every healthy level within the range (the least and the most of the
-        ratio, whatever the signs).
+        ratio, whatever the signs). Where ``unseen`` >= 1 the healthy level may be nothing
+        at all (a change of the whole friction goes unseen: the valve plate's film shear on
+        thin oil, measured on the bank's cold start without temperature topic, seed 3): the
+        upper end is then ``inf``, not a number divided by almost zero.
 
     """
     if not unseen > 0.0:
         return low, high
     least, most = 1.0 - unseen, 1.0 + unseen
     lo, hi = 1.0 + low, 1.0 + high
-    ends = [x / max(y, _LEAST_DIVISOR) for x in (lo, hi) for y in (least, most)]
-    return min(ends) - 1.0, max(ends) - 1.0
+    ends = [x / y for x in (lo, hi) for y in (least, most) if y > 0.0]
+    return min(ends) - 1.0, (max(ends) - 1.0 if least > 0.0 else math.inf)
