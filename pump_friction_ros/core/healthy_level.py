@@ -51,7 +51,6 @@ from .friction_bias import Z95
 __all__ = ['interval', 'oil_seen_moving', 'with_unseen_level']
 
 
-
 def interval(change: float, var: float, level_rel_std: float) -> tuple[float, float]:
     """
     Return the 95 % interval of a relative change, the baseline level's uncertainty added.
