@@ -256,6 +256,24 @@ def test_false_alarm_rates_delays_confusion_and_coverage_by_hand():
     assert '| valve_plate_x1.6: delay p50/p90 [mon p90] s' in table and '(1 nd)' in table
 
 
+def test_an_interval_without_an_upper_end_is_counted_apart_not_as_a_cover():
+    nominal = {'fault': 'nominal', 'truth_class': 'nominal', 'onset_s': math.inf,
+               'vp_truth': 1.0}
+    records = [record(**nominal, vp_std=math.inf),  # holds any truth: says nothing
+               record(**nominal, vp_scale=1.03, vp_std=0.01),  # misses
+               record(**nominal, family='sine'),  # holds
+               record(vp_scale=1.6, vp_std=0.03, other_std=math.inf)]  # holds
+    fig = bank_figures(records)
+    assert fig['coverage_vp']['nominal'] == pytest.approx(1 / 2)
+    assert fig['coverage_vp_by_family'] == {'trapezoid': 1 / 2, 'sine': 1.0, 'all': 2 / 3}
+    assert fig['unbounded_vp_by_family'] == {'trapezoid': 1, 'sine': 0, 'all': 1}
+    assert math.isnan(fig['coverage_other']['valve_plate_x1.6'])  # its only one unbounded
+    row = next(line for line in format_table(fig).splitlines()
+               if line.startswith('| cov vp, all runs'))
+    cells = [cell.strip() for cell in row.split('|')[3:6]]
+    assert cells == ['67 % (1 unbounded)', '50 % (1 unbounded)', '100 %']
+
+
 # -- the monitor adapter ----------------------------------------------------------------------
 
 def monitored_core(table, valve_plate, rest, loss):

@@ -130,6 +130,11 @@ def covers(scale: float, truth: float, std: float) -> bool:
     return abs(scale - truth) <= Z95 * std * (1.0 + 1e-9)
 
 
+def _coverage(readings: list[tuple[float, float, float]]) -> float:
+    """Return the share of (scale, truth, std) whose interval holds the truth, of the bounded."""
+    return _fraction([covers(*reading) for reading in readings if math.isfinite(reading[2])])
+
+
 def _median(values: list[float]) -> float:
     ordered = sorted(values)
     n = len(ordered)
@@ -179,7 +184,9 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
         * ``vp_scale_error_median``, ``vp_scale_error_p90_abs``,
           ``other_scale_error_median``, ``other_scale_error_p90_abs``, ``coverage_vp``,
           ``coverage_other`` (per fault, and 'all'); ``coverage_vp_by_family`` (all runs of
-          each family);
+          each family); a coverage is of the bounded intervals: an interval without an upper
+          end (std ``inf``: the healthy level may be nothing, ``healthy_level``) holds any
+          truth and says nothing, and is counted apart (``unbounded_vp_by_family``);
         * ``floors``: the issue's floors on the fault runs in their scope
           (`floors.floor_figures`).
 
@@ -237,8 +244,11 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
                            if r.truth_class == 'valve_plate' and family in (r.family, 'all')])
         for family in [*families, 'all']}
     fig['coverage_vp_by_family'] = {
-        family: _fraction([covers(r.vp_scale, r.vp_truth, r.vp_std) for r in records
+        family: _coverage([(r.vp_scale, r.vp_truth, r.vp_std) for r in records
                            if family in (r.family, 'all')]) for family in [*families, 'all']}
+    fig['unbounded_vp_by_family'] = {
+        family: sum(not math.isfinite(r.vp_std) for r in records
+                    if family in (r.family, 'all')) for family in [*families, 'all']}
     groups = {**by_fault, 'all': records}
     vp_err = {f: [r.vp_scale - r.vp_truth for r in runs] for f, runs in groups.items()}
     other = {f: [r for r in runs if r.other_truth_exact] for f, runs in groups.items()}
@@ -249,10 +259,10 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
     fig['other_scale_error_median'] = {f: _median(e) for f, e in other_err.items()}
     fig['other_scale_error_p90_abs'] = {f: nearest_rank(map(abs, e), 90.0)
                                         for f, e in other_err.items()}
-    fig['coverage_vp'] = {f: _fraction([covers(r.vp_scale, r.vp_truth, r.vp_std)
-                                        for r in runs]) for f, runs in groups.items()}
+    fig['coverage_vp'] = {f: _coverage([(r.vp_scale, r.vp_truth, r.vp_std) for r in runs])
+                          for f, runs in groups.items()}
     fig['coverage_other'] = {
-        f: _fraction([covers(r.other_scale, r.other_truth, r.other_std) for r in runs])
+        f: _coverage([(r.other_scale, r.other_truth, r.other_std) for r in runs])
         for f, runs in other.items()}
     from .floors import floor_figures  # (it reads the records with `nearest_rank`)
 
@@ -318,11 +328,12 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
         f'{_percent(figures["monitored_fraction"][f])} / '
         f'{_percent(figures["above_min_speed_fraction"][f])}' for f in ['all', *families])]
         + [''] * (len(ATTRIBUTIONS) + 5))
+    unbounded = figures.get('unbounded_vp_by_family', {})
     for name, key in (('valve-plate faults named vp', 'vp_attribution_by_family'),
                       ('cov vp, all runs', 'coverage_vp_by_family')):
-        rows.append([name, str(figures['runs']),
-                     *(_percent(figures[key][f]) for f in ['all', *families])]
-                    + [''] * (len(ATTRIBUTIONS) + 5))
+        rows.append([name, str(figures['runs']), *(_percent(figures[key][f]) + (
+            f' ({unbounded[f]} unbounded)' if key.startswith('cov') and unbounded.get(f) else '')
+            for f in ['all', *families])] + [''] * (len(ATTRIBUTIONS) + 5))
     for fault, per_family in figures['delay_p50_s'].items():
         cells = []
         for family in ['all', *families]:
