@@ -130,5 +130,6 @@ def test_usage_errors_are_the_errors_module_class_and_print_one_line(argv, messa
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith('pump_friction: error: ') and message in err and err.count('\n') == 1
-    from pump_friction_ros.app import cli
-    assert cli.UsageError is errors.UsageError
+    from pump_friction_ros.app.arguments import Parser
+    with pytest.raises(errors.UsageError, match='unrecognized arguments: --nope'):
+        Parser(prog='pump_friction').parse_args(['--nope'])  # the errors module's class
