@@ -24,7 +24,12 @@ import yaml
 
 from .errors import ConfigError
 
-__all__ = ['read_yaml']
+__all__ = ['SafeDumper', 'read_yaml']
+
+_EXPONENT_FLOAT = re.compile(
+    r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$')
+"""A plain number with an exponent and no dot (``1e-3``): a string to YAML 1.1, a double to
+ROS 2 (`_Loader`)."""
 
 
 class _Loader(yaml.SafeLoader):
@@ -39,10 +44,21 @@ class _Loader(yaml.SafeLoader):
     """
 
 
-_Loader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
-    re.compile(r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$'),
-    list('-+0123456789.'))
+_Loader.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
+                              list('-+0123456789.'))
+
+
+class SafeDumper(getattr(yaml, 'CSafeDumper', yaml.SafeDumper)):  # type: ignore[misc]
+    """
+    PyYAML's safe dumper (libyaml's where built), quoting a string that reads as ``1e-3``.
+
+    The loader above reads such a plain scalar as a number; so a string of that form (a
+    hardware id '1e5') is written quoted, and a file this package writes reads back as written.
+    """
+
+
+SafeDumper.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
+                                 list('-+0123456789.'))
 
 
 def read_yaml(path: Path, what: str) -> Any:

@@ -22,6 +22,7 @@ the sample bags' simulated pump lives in ``bags/eha_params.yaml``.
 """
 
 import argparse
+import math
 from pathlib import Path
 
 from pump_friction_ros.core.node_parameters import (
@@ -33,6 +34,7 @@ from pump_friction_ros.errors import ConfigError
 from pump_friction_ros.paths import config_dir
 from pump_friction_ros.sim.duty_cycle import DutyCycle
 from pump_friction_ros.sim.sample_bags import sample_params_text
+from pump_friction_ros.yaml_files import read_yaml, SafeDumper
 import pytest
 import yaml
 
@@ -98,6 +100,15 @@ def test_a_plain_exponent_without_a_dot_is_a_number_as_ros_2_reads_it(tmp_path):
     quoted.write_text("torque_estimator:\n  ros__parameters:\n    cusum_drift_nm: '3e-2'\n")
     with pytest.raises(ConfigError, match=r"cusum_drift_nm: expected a number, got '3e-2'"):
         load_estimator_config(quoted)
+
+
+def test_a_string_that_would_read_as_a_number_is_written_quoted_and_reads_back(tmp_path):
+    # the loader reads a plain 1e5 as ROS 2 does, a number: the files this package writes
+    # (the baseline file, with the node's hardware_id in its provenance) quote such a string
+    doc = {'hardware_id': '1e5', 'other': '2E-3', 'gain': 1e-05, 'std': math.inf, 'n': 3}
+    path = tmp_path / 'round.yaml'
+    path.write_text(yaml.dump(doc, Dumper=SafeDumper))
+    assert read_yaml(path, 'file') == doc
 
 
 def test_relative_pump_file_resolves_against_the_current_directory_and_says_so(

@@ -43,7 +43,7 @@ import yaml
 
 from .. import __version__, MODEL_VERSION
 from ..errors import BaselineError, BaselineMismatchError, ConfigError, OutputError, quote
-from ..yaml_files import read_yaml
+from ..yaml_files import read_yaml, SafeDumper
 
 if TYPE_CHECKING:
     from .estimator import TorqueEstimator
@@ -73,7 +73,7 @@ threshold keeps what was learnt."""
 _HEADER = ("# Healthy baseline of pump_friction_ros's wear monitor: written by the node or by\n"
            '# pump_friction learn-baseline, checked against the provenance when loaded; do not\n'
            '# edit. Re-learn after a repair: ~/reset_monitor or pump_friction reset-baseline.\n')
-_DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
+_DUMPER = SafeDumper  # (quotes a string that the loader would read as a number)
 
 # -- provenance ---------------------------------------------------------------------------
 
