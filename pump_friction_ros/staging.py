@@ -250,40 +250,47 @@ class Staged:
     def __init__(self, target: str | Path, force: bool, is_dir: bool, *, create: bool = True,
                  looks_like: Callable[[Path], bool] | None = None) -> None:
         target = Path(target)
-        self.target = target
-        if target.exists():
+        self.target = target  # as given, for the messages; ``where``, absolute, for the work
+        where = Path(os.path.abspath(target))
+        here = Path.cwd()
+        if where == here or where in here.parents:  # '.', '..', '/': not an output's name
+            raise OutputError(f'cannot create the output {target}: it is the current folder '
+                              'or one above it; name a folder or file below it')
+        self._where = where
+        if where.exists() or where.is_symlink():  # (a dangling link too: something is there)
             if not force:
                 raise OutputError(f'output exists: {target} (remove it, choose another path, '
                                   'or pass --force)')
-            if target.is_dir() != is_dir:
+            if where.is_dir() != is_dir:
                 want, found = ('a folder', 'a file') if is_dir else ('a file', 'a folder')
                 raise OutputError(f'output {target} is {found}, expected {want}: not '
                                   'replaced')
-            if is_dir and looks_like is not None and any(target.iterdir()) and \
-                    not looks_like(target):
+            if is_dir and looks_like is not None and any(where.iterdir()) and \
+                    not looks_like(where):
                 raise OutputError(f'output {target} is a folder that does not look like an '
                                   'earlier output of this kind: not replaced (remove it '
                                   'yourself or choose another path)')
-        self._made = _make_folder(target.parent, target)
+        self._made = _make_folder(where.parent, target)
         try:
-            self._tmp_parent = Path(tempfile.mkdtemp(prefix=f'.{target.name}.partial-',
-                                                     dir=target.parent))
+            self._tmp_parent = Path(tempfile.mkdtemp(prefix=f'.{where.name}.partial-',
+                                                     dir=where.parent))
         except OSError as exc:
             remove_empty_folders(self._made)
             raise OutputError(f'cannot create the output {target}: cannot write in '
                               f'{target.parent} ({_reason(exc)})') from None
-        self.path = self._tmp_parent / target.name
+        self.path = self._tmp_parent / where.name
         if is_dir and create:
             self.path.mkdir()
 
     def commit(self) -> None:
         """Move the output into place (replacing an old one) and remove the staging folder."""
+        where = self._where
         try:
-            if self.target.is_dir() and not self.target.is_symlink():
-                shutil.rmtree(self.target)
-            elif self.target.exists() or self.target.is_symlink():
-                self.target.unlink()
-            os.replace(self.path, self.target)
+            if where.is_dir() and not where.is_symlink():
+                shutil.rmtree(where)
+            elif where.exists() or where.is_symlink():
+                where.unlink()
+            os.replace(self.path, where)
         except OSError as exc:
             self.discard()
             raise OutputError(f'cannot write the output {self.target}: {_reason(exc)}') \

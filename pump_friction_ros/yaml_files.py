@@ -26,8 +26,7 @@ from .errors import ConfigError
 
 __all__ = ['SafeDumper', 'read_yaml']
 
-_EXPONENT_FLOAT = re.compile(
-    r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$')
+_EXPONENT_FLOAT = re.compile(r'^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$')
 """A plain number with an exponent and no dot (``1e-3``): a string to YAML 1.1, a double to
 ROS 2 (`_Loader`)."""
 
@@ -61,7 +60,7 @@ SafeDumper.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
                                  list('-+0123456789.'))
 
 
-def read_yaml(path: Path, what: str) -> Any:
+def read_yaml(path: Path, what: str, ros_numbers: bool = True) -> Any:
     """
     Parse a YAML file safely; every failure is one `ConfigError` line naming the file.
 
@@ -71,6 +70,9 @@ def read_yaml(path: Path, what: str) -> Any:
         The file.
     what : str
         What the file is, for the messages (``pump file``, ``parameters file``).
+    ros_numbers : bool
+        Read a plain ``1e-3`` as a number, as ROS 2 does (`_Loader`); False for a file only
+        this package writes (a baseline file): PyYAML's own reading, as it was written.
 
     Returns
     -------
@@ -86,7 +88,8 @@ def read_yaml(path: Path, what: str) -> Any:
 
     """
     try:
-        return yaml.load(path.read_text(encoding='utf-8'), Loader=_Loader)  # (safe: plain data)
+        loader = _Loader if ros_numbers else yaml.SafeLoader  # (both safe: plain data)
+        return yaml.load(path.read_text(encoding='utf-8'), Loader=loader)
     except FileNotFoundError:
         raise ConfigError(f'{what} not found: {path}') from None
     except (OSError, UnicodeDecodeError) as exc:

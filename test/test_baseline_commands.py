@@ -190,6 +190,13 @@ BAD = {
 }
 
 
+def test_learn_baseline_leaves_no_folder_made_for_its_out_when_it_fails(capsys, tmp_path):
+    out = tmp_path / 'new' / 'deeper' / 'b.yaml'  # folders it could make, then a bad bag
+    code, _, err = run(capsys, 'learn-baseline', tmp_path / 'nope', '--out', out)
+    assert code == 2 and 'nope' in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize('case', sorted(BAD))
 def test_bad_arguments_exit_2_with_one_line(capsys, tmp_path, case):
     code, out, err = run(capsys, *BAD[case](tmp_path))

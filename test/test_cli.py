@@ -147,6 +147,27 @@ def test_plot_writes_labelled_png_figures(capsys, tmp_path):
         assert width > 400 and height > 300
 
 
+@pytest.mark.parametrize('out', ['.', '..', '/'])
+def test_an_output_named_by_the_current_folder_or_one_above_is_refused_and_leaves_nothing(
+        capsys, tmp_path, monkeypatch, out):
+    # '.' has no name: the staging folder was the output itself, left behind and named
+    here = tmp_path / 'here'
+    here.mkdir()
+    (here / 'fig03_mine.png').write_bytes(b'mine')
+    monkeypatch.chdir(here)
+    code, _, err = run(capsys, 'plot', '--out', out, '--force')
+    assert code == 2 and err.count('\n') == 1 and 'the current folder or one above' in err
+    assert sorted(p.name for p in here.iterdir()) == ['fig03_mine.png']
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['here']
+
+
+def test_a_dangling_link_at_the_output_is_an_output_that_exists(capsys, tmp_path):
+    link = tmp_path / 'figs'
+    link.symlink_to(tmp_path / 'nowhere')
+    code, _, err = run(capsys, 'plot', '--out', str(link))
+    assert code == 2 and 'output exists' in err and link.is_symlink()
+
+
 def test_plot_replaces_an_earlier_folder_only_with_force_and_refuses_a_file(capsys, tmp_path):
     figs = tmp_path / 'figs'
     figs.mkdir()

@@ -392,29 +392,45 @@ def _bank_must_not_run(*args, **kwargs):
     raise AssertionError('the bank ran before its output was checked')
 
 
-@pytest.mark.parametrize('next_morning', [False, True])
-def test_a_bad_out_folder_fails_before_the_bank_runs(next_morning, tmp_path, monkeypatch,
-                                                     capsys):
+def test_a_bad_out_folder_fails_before_the_bank_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(command_module, 'run_bank', _bank_must_not_run)
-    monkeypatch.setattr(command_module, 'run_next_mornings', _bank_must_not_run)
-    extra = ['--next-morning'] if next_morning else []
     a_file = tmp_path / 'a_file'
     a_file.write_text('mine\n')
-    under_a_file = a_file / 'bank'
     mine = tmp_path / 'mine'
     mine.mkdir()
     (mine / 'notes.txt').write_text('mine\n')
     for out, force, message in [(a_file, False, 'output exists'),
                                 (a_file, True, 'is a file, expected a folder'),
-                                (under_a_file, False, 'is not a folder'),
+                                (a_file / 'bank', False, 'is not a folder'),
                                 (mine, True, 'does not look like an earlier output')]:
-        args = ['evaluate-monitor', '--quiet', '--out', str(out), *extra]
+        args = ['evaluate-monitor', '--quiet', '--out', str(out)]
         assert main(args + ['--force'] * force) == 2
         err = capsys.readouterr().err
         assert err.count('\n') == 1 and message in err and str(out) in err
     assert a_file.read_text() == 'mine\n' and sorted(p.name for p in mine.iterdir()) == [
         'notes.txt']
     assert sorted(p.name for p in tmp_path.iterdir()) == ['a_file', 'mine']  # no staging
+
+
+def test_the_next_morning_writes_its_one_file_beside_what_the_folder_holds(tmp_path,
+                                                                           monkeypatch, capsys):
+    monkeypatch.setattr(command_module, 'run_next_mornings', lambda *args: 'runs')
+    monkeypatch.setattr(command_module, 'format_next_mornings', lambda runs, seeds: 'TABLE')
+    a_file = tmp_path / 'a_file'
+    a_file.write_text('mine\n')
+    assert main(['evaluate-monitor', '--next-morning', '--out', str(a_file)]) == 2
+    assert 'a_file is not a folder' in capsys.readouterr().err  # checked before it runs
+    bank = tmp_path / 'bank'  # an earlier bank's outputs stay
+    bank.mkdir()
+    (bank / 'table.md').write_text('bank\n')
+    assert main(['evaluate-monitor', '--next-morning', '--out', str(bank)]) == 0
+    assert str(bank / 'next_morning.md') in capsys.readouterr().out
+    assert (bank / 'next_morning.md').read_text() == 'TABLE\n'
+    assert (bank / 'table.md').read_text() == 'bank\n'
+    assert main(['evaluate-monitor', '--next-morning', '--out', str(bank)]) == 2
+    assert 'output exists' in capsys.readouterr().err
+    assert main(['evaluate-monitor', '--next-morning', '--out', str(bank), '--force']) == 0
+    assert sorted(p.name for p in bank.iterdir()) == ['next_morning.md', 'table.md']
 
 
 def test_the_out_folder_is_written_whole_and_replaced_only_with_force(quick, tmp_path,

@@ -109,6 +109,10 @@ def test_a_string_that_would_read_as_a_number_is_written_quoted_and_reads_back(t
     path = tmp_path / 'round.yaml'
     path.write_text(yaml.dump(doc, Dumper=SafeDumper))
     assert read_yaml(path, 'file') == doc
+    # a file written before (a plain 1e5 string) reads as written where only we write it
+    path.write_text(yaml.dump(doc, Dumper=yaml.SafeDumper))
+    assert read_yaml(path, 'baseline file', ros_numbers=False) == doc
+    assert read_yaml(path, 'parameters file')['hardware_id'] == 1e5  # as ROS 2 would
 
 
 def test_relative_pump_file_resolves_against_the_current_directory_and_says_so(

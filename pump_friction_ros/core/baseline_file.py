@@ -43,6 +43,7 @@ import yaml
 
 from .. import __version__, MODEL_VERSION
 from ..errors import BaselineError, BaselineMismatchError, ConfigError, OutputError, quote
+from ..staging import remove_empty_folders
 from ..yaml_files import read_yaml, SafeDumper
 
 if TYPE_CHECKING:
@@ -284,6 +285,9 @@ def writable_folder(path: Path) -> None:
     """
     Check that `write_baseline` can write ``path``: its folder made, a file made in it.
 
+    The folders made for the check and the file are removed again: a run that fails later
+    leaves nothing behind (`write_baseline` makes them when it writes).
+
     Parameters
     ----------
     path : Path
@@ -295,6 +299,7 @@ def writable_folder(path: Path) -> None:
         It cannot (one line, with the reason, as `write_baseline` would say it).
 
     """
+    missing = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.probe', dir=path.parent)
@@ -303,6 +308,8 @@ def writable_folder(path: Path) -> None:
     except OSError as exc:
         raise OutputError(f'cannot write baseline file {path}: '
                           f'{exc.strerror or type(exc).__name__}') from None
+    finally:
+        remove_empty_folders(missing)
 
 
 def _fsync_folder(folder: Path) -> None:
@@ -341,7 +348,7 @@ def read_baseline(path: Path) -> dict[str, Any]:
 
     """
     try:
-        doc = read_yaml(path, 'baseline file')
+        doc = read_yaml(path, 'baseline file', ros_numbers=False)  # as it was written
     except ConfigError as exc:
         raise BaselineError(str(exc)) from None
     if not isinstance(doc, dict) or doc.get('format') != BASELINE_FORMAT:

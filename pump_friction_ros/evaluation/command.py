@@ -25,9 +25,12 @@ from .settings import FULL, QUICK
 from ..progress import ProgressBar
 from ..staging import Staged, StagedOutputs
 
-__all__ = ['EVALUATION_FILES', 'evaluate_monitor', 'looks_like_evaluation']
+__all__ = ['EVALUATION_FILES', 'NEXT_MORNING_FILE', 'evaluate_monitor',
+           'looks_like_evaluation']
 
-EVALUATION_FILES = ('records.csv', 'figures.json', 'table.md', 'next_morning.md')
+NEXT_MORNING_FILE = 'next_morning.md'
+"""The file ``--next-morning`` writes into ``--out`` (beside a bank's outputs, if any)."""
+EVALUATION_FILES = ('records.csv', 'figures.json', 'table.md', NEXT_MORNING_FILE)
 """What an ``--out`` folder of this command holds, besides its PNG plots."""
 
 
@@ -69,7 +72,8 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
         Folder for records.csv, figures.json, table.md and the PNG plots: checked and made
         before the bank runs, written under a temporary name and moved into place at the
         end (``staging``), so that a bad path fails at once and an interrupted run leaves
-        nothing that looks complete.
+        nothing that looks complete. With ``next_morning``, the one file
+        ``next_morning.md`` in it, staged the same way.
     seed : int
         Bank seed.
     progress : bool
@@ -77,7 +81,8 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     next_morning : bool
         Run the next mornings (table and ``next_morning.md`` in ``out``) instead of the bank.
     force : bool
-        Replace an existing ``out`` folder that holds an earlier evaluation's outputs.
+        Replace an existing ``out`` folder that holds only an earlier evaluation's outputs
+        (its ``next_morning.md`` too), or with ``next_morning`` that file.
 
     Returns
     -------
@@ -93,15 +98,18 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     settings = QUICK if quick else FULL
     outputs = StagedOutputs()
     try:
-        staged = None if out is None else outputs.add(out, force, True,
-                                                      looks_like=looks_like_evaluation)
-        if next_morning:
+        if next_morning:  # one file, beside a bank's outputs in the same folder if any
+            staged = None if out is None else outputs.add(Path(out) / NEXT_MORNING_FILE,
+                                                          force, False)
             table = format_next_mornings(run_next_mornings(settings, [seed], workers), [seed])
             print(table)  # (printed before it is written: a failed write loses nothing)
             if staged is not None:
-                (staged.path / 'next_morning.md').write_text(table + '\n', encoding='utf-8')
-                _commit(outputs, staged, ['next_morning.md'])
+                staged.path.write_text(table + '\n', encoding='utf-8')
+                outputs.commit()
+                print(staged.target)
             return 0
+        staged = None if out is None else outputs.add(out, force, True,
+                                                      looks_like=looks_like_evaluation)
         with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
             result = run_bank(settings, workers=workers, seed=seed,
                               progress=lambda done, total: bar(done / total))

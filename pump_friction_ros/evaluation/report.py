@@ -359,7 +359,9 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               'detected, counted as infinite). vp..none: attribution at the end of the runs. '
               'err: reported - true scale at the end, median; cov: runs whose value +- 1.96 '
               'std holds the truth (other: where all other components share one factor; '
-              'an intermittent fault: the factor the isolation memory holds at the end). '
+              'an intermittent fault: the factor the isolation memory holds at the end), of the '
+              'runs whose interval has an upper end (one without, std inf, holds any truth: '
+              'counted apart, "n unbounded"). '
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')
     out += ['', legend]
     if result is not None:
