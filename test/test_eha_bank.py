@@ -22,9 +22,9 @@ import numpy as np
 from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.monitor import OK, WARN
 from pump_friction_ros.evaluation.bank import (
-    _feed,
     base_config,
     build_scenarios,
+    feed_signals,
     MonitorReading,
     valve_plate_truth,
 )
@@ -212,7 +212,7 @@ def test_the_node_sees_the_duplicates_as_such():
     table = cached_table(load_pump(None))
     sim = simulate_scenario(scen, table)
     core = TorqueEstimator(scen.estimator_config(), table, 70e-6, 'x')
-    _feed(core, sim, math.inf)
+    feed_signals(core, sim, math.inf)
     joint = int(np.sum(np.diff(sim.t_s) == 0))
     pressure = int(np.sum(np.diff(sim.pressure_t_s) == 0))
     # a JointState duplicate repeats both its speed and its torque sample

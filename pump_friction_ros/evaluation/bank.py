@@ -29,7 +29,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from functools import lru_cache
 import math
 import os
 import time
@@ -37,9 +36,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .bank_node import node_spec, node_table, pump_and_table, scenario_node, simulated
 from .eha_scenarios import draw_eha
 from .eha_settings import EhaSettings
-from .scenarios import Scenario, simulate_scenario, SimulatedScenario
+from .scenarios import Scenario, SimulatedScenario
 from .settings import BankSettings, FAMILIES, Family, FAULTS
 from .true_pump import true_table
 from ..core.attribution import Verdict
@@ -47,14 +47,10 @@ from ..core.estimator import TorqueEstimator
 from ..core.inputs import InputKind
 from ..core.monitor import OK
 from ..core.node_parameters import EstimatorConfig, load_estimator_config
-from ..core.oil_range import table_spec_for
 from ..paths import config_dir
-from ..physics.pump_parameters import load_pump, PumpParams
-from ..table.friction_table import FrictionTable, TableSpec
-from ..table.table_files import cached_table
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'baseline_learnt',
-           'build_scenarios', 'prepare_true_tables', 'read_monitor', 'run_bank',
+           'build_scenarios', 'feed_signals', 'prepare_true_tables', 'read_monitor', 'run_bank',
            'run_scenario', 'valve_plate_truth']
 
 _NS = 1_000_000_000
@@ -201,23 +197,6 @@ class BankResult:
     cpu_s: float  # CPU time of this process and its workers
 
 
-@lru_cache(maxsize=1)
-def _pump_and_table() -> tuple[PumpParams, FrictionTable]:
-    params = load_pump(None)
-    return params, cached_table(params)
-
-
-@lru_cache(maxsize=8)
-def _node_table(spec: TableSpec) -> FrictionTable:
-    """Return the table the node builds for its oil (`oil_range.table_spec_for`), cached."""
-    return cached_table(_pump_and_table()[0], spec=spec)
-
-
-def _node_spec(scenario: Scenario) -> TableSpec:
-    params = _pump_and_table()[0]
-    return table_spec_for(scenario.estimator_config(), params.oil.viscosity_m2_s)
-
-
 def base_config() -> EstimatorConfig:
     """
     Read the node's parameters as shipped (``config/torque_estimator.yaml``).
@@ -328,13 +307,13 @@ def prepare_true_tables(scenarios: list[Scenario]) -> int:
             variants.add((draw_eha(scenario).variant, motion.mismatch))
     for variant, mismatch in variants:
         true_table(variant, mismatch)
-    for spec in {_node_spec(scenario) for scenario in scenarios}:  # the node's, per oil
-        _node_table(spec)
+    for spec in {node_spec(scenario) for scenario in scenarios}:  # the node's, per oil
+        node_table(spec)
     return len(variants)
 
 
-def _feed(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
-          ) -> tuple[int, int | None, int, int | None]:
+def feed_signals(core: TorqueEstimator, sim: SimulatedScenario, onset_ns: float
+                 ) -> tuple[int, int | None, int, int | None]:
     """
     Feed the signals in stamp order.
 
@@ -401,13 +380,10 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         The run's figures.
 
     """
-    params, table = _pump_and_table()
-    sim = simulate_scenario(scenario, table)
-    config = scenario.estimator_config()
-    core = TorqueEstimator(config, _node_table(_node_spec(scenario)),
-                           params.oil.viscosity_m2_s, params.name)
+    sim = simulated(scenario)
+    core = scenario_node(scenario)
     onset_ns = scenario.onset_s * 1e9
-    before, first, monitored, learnt = _feed(core, sim, onset_ns)
+    before, first, monitored, learnt = feed_signals(core, sim, onset_ns)
     period_s = float(sim.t_s[1] - sim.t_s[0])
     reading = read_monitor(core)
     fault = scenario.fault
@@ -425,8 +401,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,
         above_min_speed_fraction=sim.above_min_speed_fraction,
         monitored_delay_s=math.inf if first is None else monitored * period_s,
-        fault_running_nm=sim.fault_running_nm, allowance_nm=config.cusum_drift_nm,
-        warn_nm_s=config.cusum_warn_nm_s,
+        fault_running_nm=sim.fault_running_nm, allowance_nm=core.config.cusum_drift_nm,
+        warn_nm_s=core.config.cusum_warn_nm_s,
         baseline_learnt_s=math.inf if learnt is None else learnt / _NS,
         cleared_attribution=reading.cleared_attribution
         if reading.cleared_onset_s >= scenario.onset_s else 'none')
@@ -460,7 +436,7 @@ def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,
     if workers < 1:
         raise ValueError('workers must be >= 1')
     scenarios = build_scenarios(settings, seed, config)
-    _pump_and_table()  # build / load the tables once, before any worker starts
+    pump_and_table()  # build / load the tables once, before any worker starts
     prepare_true_tables(scenarios)
     start, cpu_start = time.perf_counter(), _cpu_s()
     records: list[RunRecord] = []

@@ -31,18 +31,10 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 import math
 
-from .bank import (
-    _feed,
-    _node_spec,
-    _node_table,
-    _pump_and_table,
-    build_scenarios,
-    prepare_true_tables,
-    simulate_scenario,
-)
+from .bank import build_scenarios, feed_signals, prepare_true_tables
+from .bank_node import scenario_node, simulated
 from .scenarios import Scenario, SimulatedScenario
 from .settings import BankSettings
-from ..core.estimator import TorqueEstimator
 from ..core.monitor import LEVEL_NAMES
 
 __all__ = ['DAY_S', 'NextMorning', 'format_next_mornings', 'next_morning_scenarios',
@@ -88,24 +80,17 @@ def run_next_morning(scenario: Scenario) -> NextMorning:
         hold, and alarms, level and verdict without it.
 
     """
-    params, table = _pump_and_table()
-    sim = simulate_scenario(scenario, table)
+    sim = simulated(scenario)
     config = scenario.estimator_config()
-
-    def node(pause_s: float) -> TorqueEstimator:
-        return TorqueEstimator(replace(config, warm_up_pause_s=pause_s),
-                               _node_table(_node_spec(scenario)), params.oil.viscosity_m2_s,
-                               params.name)
-
-    day_one = node(config.warm_up_pause_s)
-    day_one_alarms = _feed(day_one, sim, math.inf)[0]
+    day_one = scenario_node(scenario)
+    day_one_alarms = feed_signals(day_one, sim, math.inf)[0]
     state = day_one.monitor.state_dict()
     morning = _shifted(sim, DAY_S)
     days = []
     for pause_s in (config.warm_up_pause_s, 0.0):
-        core = node(pause_s)
+        core = scenario_node(scenario, replace(config, warm_up_pause_s=pause_s))
         core.monitor.load_state_dict(state)
-        alarms = _feed(core, morning, math.inf)[0]
+        alarms = feed_signals(core, morning, math.inf)[0]
         days.append((alarms, core.monitor.hold_released_s - DAY_S, core.monitor.level,
                      core.monitor.verdict(1.0)[0] if core.monitor.level else ''))
     (alarms, released_s, level, _), (without, _, level_without, verdict) = days
@@ -155,8 +140,7 @@ def run_next_mornings(settings: BankSettings, seeds: list[int], workers: int = 1
 
     """
     scenarios = [s for seed in seeds for s in next_morning_scenarios(settings, seed)]
-    _pump_and_table()
-    prepare_true_tables(scenarios)
+    prepare_true_tables(scenarios)  # (the pump's and the node's tables too)
     if workers == 1:
         return [run_next_morning(s) for s in scenarios]
     with ProcessPoolExecutor(max_workers=workers) as pool:
