@@ -41,6 +41,7 @@ from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario, 
 from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
 from pump_friction_ros.evaluation.settings import FAMILIES, FAULTS, FULL, QUICK
 from pump_friction_ros.evaluation.true_pump import PumpVariant, true_table
+from pump_friction_ros.evaluation.truths import commissioned_factor, commissioned_since
 from pump_friction_ros.physics.friction import valve_plate_viscous_torque_nm
 from pump_friction_ros.physics.model import COMPONENTS
 from pump_friction_ros.physics.oil import WaltherViscosity
@@ -342,3 +343,46 @@ def test_a_reading_in_alarm_is_held_to_the_truth_of_the_change_it_reads():
     assert valve_plate_truth(sim, began._replace(change_start_s=math.nan)) == sim.vp_truth
     # a fault that stays: its factor at the end, whatever the monitor holds
     assert valve_plate_truth(replace(sim, vp_truth_since=None), began) == sim.vp_truth
+
+
+def test_a_baseline_learnt_after_the_onset_holds_the_factor_of_its_last_learnt_running():
+    dt, learn = 1e-3, 2.0
+    t = np.arange(20000) * dt  # 20 s, a step x1.8 at 5 s and a ramp 1 -> 1.6 over 10-16 s
+    step = np.where(t >= 5.0, 1.8, 1.0)
+    ramp = 1.0 + 0.6 * np.clip((t - 10.0) / 6.0, 0.0, 1.0)
+    sig = np.full(t.size, 0.2)
+    running = (np.arange(t.size) % 2) == 0  # half the samples: 2 s of running is 4 s of time
+    step_at = commissioned_since(step, t, sig, running, learn)
+    assert step_at(4.0) == 1.0  # learnt before the onset: the healthy pump, exactly
+    assert step_at(9.5) == pytest.approx(1.8)  # its last 4 s after the onset: all of it
+    assert step_at(6.0) == pytest.approx(1.0 + 0.8 * 1.0 / 4.0, abs=1e-3)  # 1 of its 4 s
+    # a ramp: the mean over its last 4 s of time (linear: the factor at their middle)
+    assert commissioned_since(ramp, t, sig, running, learn)(14.0) == \
+        pytest.approx(1.0 + 0.6 * 2.0 / 6.0, abs=1e-3)
+    # least squares weighs each sample by its signature squared
+    heavy = np.where(t < 8.0, 0.1, 0.3)
+    assert commissioned_factor(t[running], step[running], heavy[running], 2 * dt, 2.0,
+                               9.999) == pytest.approx(1.8)
+    mixed = commissioned_factor(t, np.where(t >= 7.5, 1.8, 1.0), heavy, dt, 2.0, 8.9995)
+    assert mixed == pytest.approx((0.005 * 1.0 + 0.005 * 1.8 + 0.09 * 1.8) / 0.1, abs=1e-3)
+    assert commissioned_since(1.0, t, sig, running, learn) is None  # no valve-plate fault
+    assert commissioned_factor(t, step, sig, dt, learn, -1.0) == 1.0  # nothing before
+
+
+def test_a_scale_from_a_baseline_learnt_after_the_onset_is_held_to_the_change_since():
+    dt = 1e-3
+    t = np.arange(20000) * dt
+    step = np.where(t >= 5.0, 1.8, 1.0)
+    arrays = dict.fromkeys((
+        't_s', 'speed_rad_s', 'torque_nm', 'pressure_t_s', 'pressure_diff_pa',
+        'temperature_t_s', 'temperature_c', 'true_speed_rad_s', 'true_accel_rad_s2',
+        'true_pressure_diff_pa', 'true_viscosity_m2_s', 'true_temperature_c'), np.zeros(0))
+    sim = SimulatedScenario(**arrays, motion={}, vp_truth=1.8, other_truth=1.0,
+                            other_truth_exact=True, above_min_speed_fraction=1.0,
+                            vp_commissioned=commissioned_since(step, t, np.full(t.size, 0.2),
+                                                               np.ones(t.size, bool), 2.0))
+    quiet = MonitorReading(OK, 'none', 1.0, 0.05, 1.0, 0.1, math.nan)
+    assert valve_plate_truth(sim, quiet) == 1.8  # (no learnt time given: the healthy pump)
+    assert valve_plate_truth(sim, quiet, 3.0) == 1.8  # learnt before the onset
+    assert valve_plate_truth(sim, quiet, 12.0) == pytest.approx(1.0)  # commissioned worn
+    assert valve_plate_truth(sim, quiet, math.inf) == 1.8  # never learnt: the factor

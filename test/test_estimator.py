@@ -221,6 +221,7 @@ def test_no_alarm_while_the_baseline_is_learnt_and_diagnostics_say_so(table):
     assert max(e.level for e in out) == OK and est.monitor.learning
     status = est.diagnostics(out[-1].stamp_ns)
     assert 'learning the healthy baseline' in status.message
+    assert status.message.endswith('the scales are the pump against the model')
     # meanwhile the published scales are the fit's against the model: twice the valve plate
     assert abs(est.last.valve_plate_scale - 2.0) < 0.3
 

@@ -274,6 +274,25 @@ def test_an_interval_without_an_upper_end_is_counted_apart_not_as_a_cover():
     assert cells == ['67 % (1 unbounded)', '50 % (1 unbounded)', '100 %']
 
 
+def test_a_run_whose_baseline_was_never_learnt_is_counted_apart_from_scale_figures():
+    nominal = {'fault': 'nominal', 'truth_class': 'nominal', 'onset_s': math.inf,
+               'vp_truth': 1.0}
+    records = [record(**nominal, vp_scale=4.0, vp_std=0.1, baseline_learnt_s=math.inf),
+               record(**nominal, vp_scale=1.03, vp_std=0.01, baseline_learnt_s=30.0),  # misses
+               record(**nominal, family='sine', baseline_learnt_s=math.nan),  # not kept: in
+               record(vp_scale=1.6, vp_std=0.03, baseline_learnt_s=math.inf)]  # against the model
+    fig = bank_figures(records)
+    assert fig['coverage_vp_by_family'] == {'trapezoid': 0.0, 'sine': 1.0, 'all': 1 / 2}
+    assert fig['unlearnt_by_family'] == {'trapezoid': 2, 'sine': 0, 'all': 2}
+    assert fig['coverage_vp']['nominal'] == pytest.approx(1 / 2)
+    assert math.isnan(fig['coverage_vp']['valve_plate_x1.6'])  # its only one: never learnt
+    assert fig['vp_scale_error_median']['nominal'] == pytest.approx(0.015)  # 0.03 and 0
+    row = next(line for line in format_table(fig).splitlines()
+               if line.startswith('| cov vp, all runs'))
+    cells = [cell.strip() for cell in row.split('|')[3:6]]
+    assert cells == ['50 % (2 never learnt)', '0 % (2 never learnt)', '100 %']
+
+
 # -- the monitor adapter ----------------------------------------------------------------------
 
 def monitored_core(table, valve_plate, rest, loss):

@@ -142,7 +142,8 @@ class MonitorReport:
     def baseline_status(self) -> str:
         """Return the baseline's state in words (for /diagnostics)."""
         if self.baseline is None:
-            return f'{self.commissioning.status()}; no alarm until then'
+            return (f'{self.commissioning.status()}; no alarm until then, the scales are '
+                    'the pump against the model')
         return f'baseline learnt over {self.baseline.learnt_s:.0f} s of monitored running'
 
     def verdict(self, side: float) -> tuple[str, str]:

@@ -108,7 +108,8 @@ def read_monitor(core: TorqueEstimator) -> MonitorReading:
                           last.onset_s)
 
 
-def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
+def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading,
+                      learnt_s: float = -math.inf) -> float:
     """
     Return the valve-plate factor a reading's scale is held to.
 
@@ -116,7 +117,11 @@ def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
     began where the CUSUMs last left zero (``reading.change_start_s``): an intermittent
     fault's truth counts from there (``SimulatedScenario.vp_truth_since``). Otherwise (no
     alarm: the scale is 1 and its interval spans what the detection does not see over the
-    recent running; or a fault that stays) the simulation's ``vp_truth``.
+    recent running; or a fault that stays) the simulation's ``vp_truth``. Either is the
+    factor against the healthy pump; the scale is the change from the baseline (1: as at
+    commissioning), so where the baseline was learnt after the onset, holding the fault in
+    part or whole, the truth is that factor over the one the baseline holds
+    (``SimulatedScenario.vp_commissioned``): a pump commissioned worn reads 1, rightly.
 
     Parameters
     ----------
@@ -124,6 +129,8 @@ def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
         The run's simulation.
     reading : MonitorReading
         The monitor's reading at its end.
+    learnt_s : float
+        When the baseline was learnt [s] (-inf: before anything changed; inf: never).
 
     Returns
     -------
@@ -131,10 +138,13 @@ def valve_plate_truth(sim: SimulatedScenario, reading: MonitorReading) -> float:
         The truth [-].
 
     """
+    truth = sim.vp_truth
     if sim.vp_truth_since is not None and reading.level != OK and \
             math.isfinite(reading.change_start_s):
-        return sim.vp_truth_since(reading.change_start_s)
-    return sim.vp_truth
+        truth = sim.vp_truth_since(reading.change_start_s)
+    if sim.vp_commissioned is not None and math.isfinite(learnt_s):
+        truth /= sim.vp_commissioned(learnt_s)
+    return truth
 
 
 def baseline_learnt(core: TorqueEstimator) -> bool:
@@ -161,7 +171,7 @@ class RunRecord:
     vp_std: float
     other_scale: float
     other_std: float
-    vp_truth: float
+    vp_truth: float  # against the pump the baseline holds (`valve_plate_truth`)
     other_truth: float
     other_truth_exact: bool  # False: other_truth is a fitted ratio (one component faulty)
     monitored_fraction: float  # joint-state samples the monitor learnt from
@@ -395,7 +405,8 @@ def run_scenario(scenario: Scenario) -> RunRecord:
         first_alarm_s=math.nan if first is None else first / _NS,
         final_level=reading.level, attribution=reading.attribution,
         vp_scale=reading.vp_scale, vp_std=reading.vp_std, other_scale=reading.other_scale,
-        other_std=reading.other_std, vp_truth=valve_plate_truth(sim, reading),
+        other_std=reading.other_std,
+        vp_truth=valve_plate_truth(sim, reading, math.inf if learnt is None else learnt / _NS),
         other_truth=sim.other_truth,
         other_truth_exact=sim.other_truth_exact,
         monitored_fraction=core.counts['monitor_samples'] / sim.t_s.size,

@@ -53,6 +53,7 @@ from .sensors import (
 )
 from .settings import Fault
 from .true_pump import pump_variants, PumpVariant, true_table
+from .truths import commissioned_since
 from ..core.node_parameters import EstimatorConfig, ViscositySource
 from ..physics.model import COMPONENTS
 from ..physics.oil import WaltherViscosity
@@ -356,6 +357,8 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     # the truths are relative to the healthy true pump: the monitor reports the change
     # from its learnt baseline (other friction: the healthy-weighted ratio of its parts)
     vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
+    commissioned = commissioned_since(factors['valve_plate'], t, true['valve_plate_nm'], gate,
+                                      config.baseline_learn_s)
     vp_truth_since = None
     taken = gate & (t >= onset)
     if fault.intermittent and taken.any():  # on and off: the level over the isolation's memory
@@ -393,6 +396,7 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
         true_pressure_diff_pa=dp[joint], true_viscosity_m2_s=visc[joint],
         true_temperature_c=temp_true, motion=motion, vp_truth=vp_truth,
         other_truth=other_truth, other_truth_exact=False, vp_truth_since=vp_truth_since,
+        vp_commissioned=commissioned,
         above_min_speed_fraction=float(np.mean(np.abs(speed) >= config.monitor_min_speed_rad_s)),
         fault_running_nm=fault_running)
 

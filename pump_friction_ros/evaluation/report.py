@@ -186,7 +186,10 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
           ``coverage_other`` (per fault, and 'all'); ``coverage_vp_by_family`` (all runs of
           each family); a coverage is of the bounded intervals: an interval without an upper
           end (std ``inf``: the healthy level may be nothing, ``healthy_level``) holds any
-          truth and says nothing, and is counted apart (``unbounded_vp_by_family``);
+          truth and says nothing, and is counted apart (``unbounded_vp_by_family``); the
+          scale errors and coverages are of the runs whose baseline was learnt (a run's
+          scale without one is the pump against the model, not a change from it): the
+          others are counted apart (``unlearnt_by_family``);
         * ``floors``: the issue's floors on the fault runs in their scope
           (`floors.floor_figures`).
 
@@ -243,13 +246,18 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
         family: _fraction([r.attribution == 'valve_plate' for r in records
                            if r.truth_class == 'valve_plate' and family in (r.family, 'all')])
         for family in [*families, 'all']}
+    changes = [r for r in records if r.baseline_learnt_s != math.inf]
     fig['coverage_vp_by_family'] = {
-        family: _coverage([(r.vp_scale, r.vp_truth, r.vp_std) for r in records
+        family: _coverage([(r.vp_scale, r.vp_truth, r.vp_std) for r in changes
                            if family in (r.family, 'all')]) for family in [*families, 'all']}
     fig['unbounded_vp_by_family'] = {
-        family: sum(not math.isfinite(r.vp_std) for r in records
+        family: sum(not math.isfinite(r.vp_std) for r in changes
                     if family in (r.family, 'all')) for family in [*families, 'all']}
-    groups = {**by_fault, 'all': records}
+    fig['unlearnt_by_family'] = {
+        family: sum(r.baseline_learnt_s == math.inf for r in records
+                    if family in (r.family, 'all')) for family in [*families, 'all']}
+    groups = {f: [r for r in runs if r.baseline_learnt_s != math.inf]
+              for f, runs in {**by_fault, 'all': records}.items()}
     vp_err = {f: [r.vp_scale - r.vp_truth for r in runs] for f, runs in groups.items()}
     other = {f: [r for r in runs if r.other_truth_exact] for f, runs in groups.items()}
     other_err = {f: [r.other_scale - r.other_truth for r in runs] for f, runs in other.items()}
@@ -329,11 +337,18 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
         f'{_percent(figures["above_min_speed_fraction"][f])}' for f in ['all', *families])]
         + [''] * (len(ATTRIBUTIONS) + 5))
     unbounded = figures.get('unbounded_vp_by_family', {})
+    unlearnt = figures.get('unlearnt_by_family', {})
+
+    def apart(family: str) -> str:
+        notes = [f'{n} {what}' for n, what in ((unbounded.get(family), 'unbounded'),
+                                               (unlearnt.get(family), 'never learnt')) if n]
+        return f' ({", ".join(notes)})' if notes else ''
+
     for name, key in (('valve-plate faults named vp', 'vp_attribution_by_family'),
                       ('cov vp, all runs', 'coverage_vp_by_family')):
         rows.append([name, str(figures['runs']), *(_percent(figures[key][f]) + (
-            f' ({unbounded[f]} unbounded)' if key.startswith('cov') and unbounded.get(f) else '')
-            for f in ['all', *families])] + [''] * (len(ATTRIBUTIONS) + 5))
+            apart(f) if key.startswith('cov') else '') for f in ['all', *families])]
+            + [''] * (len(ATTRIBUTIONS) + 5))
     for fault, per_family in figures['delay_p50_s'].items():
         cells = []
         for family in ['all', *families]:
@@ -361,7 +376,10 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               'std holds the truth (other: where all other components share one factor; '
               'an intermittent fault: the factor the isolation memory holds at the end), of the '
               'runs whose interval has an upper end (one without, std inf, holds any truth: '
-              'counted apart, "n unbounded"). '
+              'counted apart, "n unbounded"); the truth is against the pump the baseline '
+              'holds (learnt after an onset: the fault over what it held then), and a run '
+              'whose baseline was never learnt, its scale the pump against the model and not '
+              'a change, is left out of err and cov ("n never learnt"). '
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')
     out += ['', legend]
     if result is not None:

@@ -51,6 +51,7 @@ from .settings import (
     TrapezoidSettings,
     WarmUpSettings,
 )
+from .truths import commissioned_since
 from ..core.node_parameters import EstimatorConfig, ViscositySource
 from ..physics.model import COMPONENTS
 from ..physics.oil import WaltherViscosity
@@ -131,6 +132,10 @@ class SimulatedScenario:
     """An intermittent fault's valve-plate truth over the change a monitor in alarm reads at
     the end: the factor over the isolation's memory of the running since that change began
     (the stamp given [s]; ``eha_scenarios.memory_weighted_since``). None: `vp_truth`."""
+    vp_commissioned: Callable[[float], float] | None = None
+    """The valve-plate factor the healthy baseline holds where it was learnt at the stamp
+    given [s], after the onset (`commissioned_factor`); None: the valve plate never
+    changes."""
 
 
 def _draw(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
@@ -416,9 +421,12 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
     vp_truth = float(np.atleast_1d(factors['valve_plate'])[-1])
     others = [fault.bearing, fault.spherical_joints, fault.piston_heads]
     exact = len(set(others)) == 1
-    # running after the onset, where the monitor learns (true speed and acceleration)
-    gate = (t >= onset) & (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
+    # running (after the onset: gate), where the monitor learns (true speed and acceleration)
+    running = (np.abs(speed) >= config.monitor_min_speed_rad_s) & \
         (np.abs(accel) <= config.monitor_max_accel_rad_s2)
+    gate = (t >= onset) & running
+    commissioned = commissioned_since(factors['valve_plate'], t, res['valve_plate_nm'],
+                                      running, config.baseline_learn_s)
     fault_running = running_fault_torque_nm(fault, res, res['theoretical_nm'], torque,
                                             direction, gate)
     if exact:
@@ -445,4 +453,5 @@ def simulate_scenario(scenario: Scenario, table: FrictionTable) -> SimulatedScen
         true_speed_rad_s=speed, true_accel_rad_s2=accel, true_pressure_diff_pa=dp,
         true_viscosity_m2_s=visc, true_temperature_c=temp_true, motion=motion,
         vp_truth=vp_truth, other_truth=float(other_truth), other_truth_exact=exact,
-        above_min_speed_fraction=above, fault_running_nm=fault_running)
+        above_min_speed_fraction=above, fault_running_nm=fault_running,
+        vp_commissioned=commissioned)
