@@ -359,10 +359,16 @@ def test_a_baseline_learnt_after_the_onset_holds_the_factor_of_its_last_learnt_r
     # a ramp: the mean over its last 4 s of time (linear: the factor at their middle)
     assert commissioned_since(ramp, t, sig, running, learn)(14.0) == \
         pytest.approx(1.0 + 0.6 * 2.0 / 6.0, abs=1e-3)
+    # exactly the last learn_s / dt samples up to and including the one at learnt_s
+    ones = np.arange(10.0)  # 1 s apart, the factor 1 + t / 10
+    assert commissioned_factor(ones, 1.0 + ones / 10.0, np.ones(10), 1.0, 4.0, 6.0) == \
+        pytest.approx(1.0 + (3 + 4 + 5 + 6) / 40.0, rel=1e-12)
+    assert commissioned_factor(ones, 1.0 + ones / 10.0, np.ones(10), 1.0, 4.0, 5.5) == \
+        pytest.approx(1.0 + (2 + 3 + 4 + 5) / 40.0, rel=1e-12)
+    assert commissioned_factor(ones, 1.0 + ones / 10.0, np.ones(10), 1.0, 4.0, 1.0) == \
+        pytest.approx(1.0 + (0 + 1) / 20.0, rel=1e-12)  # fewer than learn_s: those there
     # least squares weighs each sample by its signature squared
     heavy = np.where(t < 8.0, 0.1, 0.3)
-    assert commissioned_factor(t[running], step[running], heavy[running], 2 * dt, 2.0,
-                               9.999) == pytest.approx(1.8)
     mixed = commissioned_factor(t, np.where(t >= 7.5, 1.8, 1.0), heavy, dt, 2.0, 8.9995)
     assert mixed == pytest.approx((0.005 * 1.0 + 0.005 * 1.8 + 0.09 * 1.8) / 0.1, abs=1e-3)
     assert commissioned_since(1.0, t, sig, running, learn) is None  # no valve-plate fault

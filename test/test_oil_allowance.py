@@ -43,21 +43,23 @@ def table(paper_params):
 def test_band_friction_holds_the_valve_plates_couette_shear_over_the_band(
         table, paper_params):
     nu = VG68(50.0)
-    speeds, change = band_friction_nm(table, nu, VG68, 3.0)
+    speeds, change, other = band_friction_nm(table, nu, VG68, 3.0)
     vp, rho = paper_params.valve_plate, paper_params.oil.density_kg_m3
     # sec. 4.2: the film shear rho nu |w| / h * int r^3 is linear in nu; 3 K colder
     shear = [float(valve_plate_viscous_torque_nm(w, VG68(47.0), rho, vp)
                    - valve_plate_viscous_torque_nm(w, nu, rho, vp)) for w in speeds]
-    assert all(c >= s * (1.0 - 1e-9) for c, s in zip(change, shear, strict=True))
+    assert change == pytest.approx(shear, rel=1e-6, abs=1e-12)  # the valve plate's: exactly
     # 3 K of VG 68 at 50 degC are 14 % of its viscosity (ASTM D341)
     assert 0.13 < VG68(47.0) / nu - 1.0 < 0.15
-    # the bearing's drag adds to the film shear, but less than the film shear at speed
+    # the bearing's drag, the other components' part, less than the film shear at speed
     top = speeds.index(max(speeds))
-    assert shear[top] < change[top] < 3.0 * shear[top]
+    assert 0.0 < other[top] < shear[top] and min(other) >= 0.0
     # no band, no allowance; a wider band, a larger one
-    assert band_friction_nm(table, nu, VG68, 0.0)[1] == [0.0] * len(speeds)
-    wider = band_friction_nm(table, nu, VG68, 6.0)[1]
+    assert band_friction_nm(table, nu, VG68, 0.0)[1:] == ([0.0] * len(speeds),) * 2
+    _, wider, wider_other = band_friction_nm(table, nu, VG68, 6.0)
     assert all(w >= c for w, c in zip(wider, change, strict=True)) and wider[top] > change[top]
+    assert all(w >= c for w, c in zip(wider_other, other, strict=True)) and \
+        wider_other[top] > other[top]
 
 
 def test_allowance_interpolates_along_speed_and_holds_beyond_the_axis():
@@ -91,7 +93,7 @@ def oil_window(rng):
     return speed, vp, other, sign, th, baseline_regressors(vp, other, th * sign, sign, 0.0)
 
 
-def _swing(oil, amplitude, seed=4, windows=3000):
+def _swing(oil, amplitude, seed=4, windows=3000, truth=TRUTH):
     """
     Run a pump as learnt at commissioning whose viscous friction then swings with the oil.
 
@@ -107,7 +109,7 @@ def _swing(oil, amplitude, seed=4, windows=3000):
         wall = 10.0 * t
         swing = amplitude * SLOPE * speed * math.sin(2.0 * math.pi * wall / 1200.0) \
             if wall > 600.0 else 0.0
-        e = float(h @ TRUTH) + swing + rng.normal(0.0, 0.01)
+        e = float(h @ truth) + swing + rng.normal(0.0, 0.01)
         trace = mon.update_many([t + i * DT for i in range(n)], [DT] * n, [e] * n, [vp] * n,
                                 [other] * n, [th] * n, [sign] * n, None, [speed] * n)
         alarmed = alarmed or max(trace.level) > OK
@@ -126,6 +128,30 @@ def test_an_oil_swing_within_the_band_raises_no_alarm_and_one_beyond_it_does(see
     assert _swing(None, 0.95, seed)[1] and _swing(BAND, 3.0, seed)[1]
 
 
+@pytest.mark.parametrize('seed', [4, 5])
+def test_the_band_is_the_installations_friction_level_times_the_models(seed):
+    # a pump whose valve plate is twice the model's (its oil colder than the one assumed):
+    # its film shear, and the shear's swing with the oil, are twice the model's; a swing of
+    # 2.4 times the band's model N m is within its band (and the CUSUM's allowance k, about
+    # half the band's N m at these speeds) ...
+    cold = TRUTH.copy()
+    cold[0] = 1.0
+    mon, alarmed = _swing(BAND, 2.4, seed, truth=cold)
+    assert not mon.learning and not alarmed
+    assert 1.0 + mon.baseline.coefficients[0] == pytest.approx(2.0, abs=0.05)
+    # ... and beyond it on a pump as modelled
+    as_modelled = TRUTH.copy()
+    as_modelled[0] = 0.0
+    assert _swing(BAND, 2.4, seed, truth=as_modelled)[1]
+    # the levels scale each component's part; a level below 0 allows nothing
+    oil = OilAllowance([0.0, 100.0], [0.0, 0.02], other_change_nm=[0.0, 0.01])
+    assert oil.window_nm(100.0) == pytest.approx(0.03)
+    assert oil.window_nm(50.0, 1.9, 0.5) == pytest.approx(1.9 * 0.01 + 0.5 * 0.005)
+    assert oil.window_nm(100.0, -0.2, 1.0) == pytest.approx(0.01)
+    with pytest.raises(ValueError):
+        OilAllowance([0.0, 100.0], [0.0, 0.02], other_change_nm=[0.0])
+
+
 def test_the_undetectable_change_grows_by_the_allowance():
     without, _ = _swing(None, 0.0)
     with_band, _ = _swing(BAND, 0.0)
@@ -136,7 +162,10 @@ def test_the_undetectable_change_grows_by_the_allowance():
     # give both monitors
     rms = math.sqrt(with_band._recent_s2[0, 0] / with_band._recent_s)
     assert rms == pytest.approx(math.sqrt(without._recent_s2[0, 0] / without._recent_s))
-    assert grown == pytest.approx(475.0 * SLOPE / rms, rel=0.15)
+    # times the valve plate's level the baseline learnt (TRUTH's: 1.2)
+    level = 1.0 + float(with_band.baseline.coefficients[0])
+    assert level == pytest.approx(1.0 + TRUTH[0], abs=0.05)
+    assert grown == pytest.approx(level * 475.0 * SLOPE / rms, rel=0.15)
     # and a healthy reading's interval spans it
     assert 1.96 * with_band.valve_plate_scale_std >= with_band.undetectable_change[
         'valve_plate'] * 0.99

@@ -372,8 +372,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         # baseline's own uncertainty here (extrapolating beyond commissioning is no change)
         # and by what the oil's temperature does to the torque (``oil_allowance``)
         viscous = low = high = 0.0
-        if oil is not None:
-            viscous = oil.window_nm(self._sw * inv)
+        if oil is not None:  # (the band's change at the installation's friction levels)
+            coef = baseline.coefficients
+            viscous = oil.window_nm(self._sw * inv, 1.0 + float(coef[0]), 1.0 + float(coef[1]))
             low, high = oil.gain_interval_nm((self._sth + self._svp + self._so) * inv,
                                              temperature, baseline.temperature_c)
         self._allowance_nm_s += viscous * duration

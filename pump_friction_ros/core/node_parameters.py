@@ -213,7 +213,8 @@ class EstimatorConfig:
         0.0, 1e6)
     oil_temperature_band_c: float = _param(
         0.0, "viscosity_source parameter: the oil temperature's swing from commissioning "
-        '[K]; its friction change (oil_viscosity_40c/100c law) is not a change of the pump, '
+        '[K]; its friction change (oil_viscosity_40c/100c law, times the friction levels '
+        'the baseline learnt) is not a change of the pump, '
         "hides one as small, and widens a scale's interval by what it moves the reading "
         '(docs/monitor.md); 0: none.', 0.0, 100.0)
     torque_constant_drift_per_k: float = _param(

@@ -25,8 +25,11 @@ warmer or cooler, and two things move the torque though nothing wore:
    an oil swinging +-2.9 K over 20 min raised a WARN at every swing's warm side. The
    friction change over ``oil_temperature_band_c`` either side (0, none, by default: the
    band is the installation's, from its records), along the speed axis
-   (`band_friction_nm`), is taken off the change of every cause. With the temperature
-   topic the table follows the viscosity and this part is zero.
+   (`band_friction_nm`), per component, times the installation's friction levels that the
+   baseline learnt (`OilAllowance.window_nm`: the model's N m are not the pump's, least
+   where the oil runs colder than the viscosity assumed), is taken off the change of
+   every cause. With the temperature topic the table follows the viscosity and this part
+   is zero.
 2. **The drive's torque constant.** Torque from current reads k_t i with a k_t of one
    temperature; NdFeB magnets lose about 0.12 % of their remanence per K, so a warm motor
    delivers less than the drive assumes and the measured torque reads high by up to
@@ -65,14 +68,14 @@ __all__ = ['OilAllowance', 'band_friction_nm', 'oil_allowance']
 
 
 def band_friction_nm(table: FrictionTable, viscosity_m2_s: float, oil: WaltherViscosity,
-                     band_c: float) -> tuple[list[float], list[float]]:
+                     band_c: float) -> tuple[list[float], list[float], list[float]]:
     """
     Return the friction change over the oil temperature band, along the table's speed axis.
 
-    The change of the total friction magnitude when the oil is ``band_c`` colder or warmer
-    than where it has ``viscosity_m2_s`` (the larger of the two sides), at the middle of the
-    pressure axis: the viscous terms do not depend on the load pressure (the film is
-    sheared whatever presses on it; docs/model.md).
+    The change of the valve plate's and of the other components' friction magnitudes when
+    the oil is ``band_c`` colder or warmer than where it has ``viscosity_m2_s`` (the larger
+    of the two sides), at the middle of the pressure axis: the viscous terms do not depend
+    on the load pressure (the film is sheared whatever presses on it; docs/model.md).
 
     Parameters
     ----------
@@ -88,7 +91,8 @@ def band_friction_nm(table: FrictionTable, viscosity_m2_s: float, oil: WaltherVi
     Returns
     -------
     tuple of list
-        Speeds [rad/s] (the table's axis) and the friction change there [N m], >= 0.
+        Speeds [rad/s] (the table's axis), the valve plate's friction change there and the
+        other components' [N m], >= 0.
 
     Raises
     ------
@@ -98,7 +102,7 @@ def band_friction_nm(table: FrictionTable, viscosity_m2_s: float, oil: WaltherVi
     """
     speeds = [float(x) for x in np.asarray(table.speed_axis_rad_s)]
     if not band_c > 0.0:
-        return speeds, [0.0] * len(speeds)
+        return speeds, [0.0] * len(speeds), [0.0] * len(speeds)
     try:
         temperature = oil.temperature_c(viscosity_m2_s)
         cold, warm = oil(temperature - band_c), oil(temperature + band_c)
@@ -108,12 +112,14 @@ def band_friction_nm(table: FrictionTable, viscosity_m2_s: float, oil: WaltherVi
                           '(oil_viscosity_40c/100c_m2_s)') from None
     pressures = np.asarray(table.pressure_axis_pa)
     pressure = float(pressures[pressures.size // 2])
-    change = []
+    valve_plate, other = [], []
     for speed in speeds:
-        middle, low, high = (sum(table.magnitudes(speed, pressure, nu)[0])
+        middle, low, high = (table.magnitudes(speed, pressure, nu)[0]
                              for nu in (viscosity_m2_s, warm, cold))
-        change.append(max(abs(high - middle), abs(middle - low)))
-    return speeds, change
+        valve_plate.append(max(abs(high[0] - middle[0]), abs(middle[0] - low[0])))
+        other.append(max(abs(sum(high[1:]) - sum(middle[1:])),
+                         abs(sum(middle[1:]) - sum(low[1:]))))
+    return speeds, valve_plate, other
 
 
 class OilAllowance:
@@ -124,8 +130,9 @@ class OilAllowance:
     ----------
     speeds_rad_s : list of float
         Speeds [rad/s], increasing (`band_friction_nm`).
-    change_nm : list of float
-        The friction change over the band there [N m] (zeros with the temperature topic).
+    valve_plate_change_nm : list of float
+        The valve plate's friction change over the band there [N m] (zeros with the
+        temperature topic).
     oil : WaltherViscosity, optional
         The oil's law, where the viscosity is measured (the temperature topic): a window's
         temperature is read back from its viscosity. None: the temperature is not known.
@@ -133,26 +140,49 @@ class OilAllowance:
         ``torque_constant_drift_per_k`` [1/K].
     band_c : float
         ``oil_temperature_band_c`` [K]: the temperature change where it is not known.
+    other_change_nm : list of float, optional
+        The other components' friction change over the band there [N m] (None: zeros).
 
     """
 
-    def __init__(self, speeds_rad_s: list[float], change_nm: list[float],
+    def __init__(self, speeds_rad_s: list[float], valve_plate_change_nm: list[float],
                  oil: WaltherViscosity | None = None, drift_per_k: float = 0.0,
-                 band_c: float = 0.0) -> None:
+                 band_c: float = 0.0, other_change_nm: list[float] | None = None) -> None:
         self._speeds = np.asarray(speeds_rad_s, dtype=float)
-        self._change = np.asarray(change_nm, dtype=float)
+        self._change = np.asarray(valve_plate_change_nm, dtype=float)
+        self._other = np.zeros_like(self._change) if other_change_nm is None else \
+            np.asarray(other_change_nm, dtype=float)
+        if not self._speeds.shape == self._change.shape == self._other.shape:
+            raise ValueError('the band needs one change of each part per speed')
         self._oil = oil
         self.drift_per_k = drift_per_k
         self.band_c = band_c
 
-    def window_nm(self, speed_abs_rad_s: float) -> float:
+    def window_nm(self, speed_abs_rad_s: float, valve_plate_level: float = 1.0,
+                  other_level: float = 1.0) -> float:
         """
         Return the viscous friction's change over the band at a window's mean |speed| [N m].
+
+        The band's change is the model's, at the assumed viscosity; the installation's
+        friction is the baseline's learnt level times the model's (``baseline``: the
+        pump's film clearance, and the oil's viscosity where it runs against the one
+        assumed), and a viscous friction's change over the band is that level times the
+        model's too. Measured on the bank's steps without temperature topic, seed 4,
+        installation 1 (an ISO VG 68 assumed at 50 degC, running at 38-43 degC, learnt at
+        1.89 times the model's valve plate): at a 5 K band in the model's N m an alarm
+        went through at a trough of the swing, none with the band scaled (docs/monitor.md).
+        The level is of a component's whole magnitude, Coulomb part included: where it is
+        a Coulomb friction's difference, or the fit shares a level between the two causes
+        that the duty cycle cannot tell apart, the band is that much wider or narrower than
+        the film's.
 
         Parameters
         ----------
         speed_abs_rad_s : float
             The window's mean |speed| [rad/s].
+        valve_plate_level, other_level : float
+            The installation's friction levels against the model [-] (1: as modelled;
+            below 0 taken as 0).
 
         Returns
         -------
@@ -160,7 +190,10 @@ class OilAllowance:
             The friction change over the band, interpolated (held beyond the axis), >= 0.
 
         """
-        return float(np.interp(speed_abs_rad_s, self._speeds, self._change))
+        speed = speed_abs_rad_s
+        return max(0.0, valve_plate_level) * float(np.interp(speed, self._speeds,
+                                                             self._change)) + \
+            max(0.0, other_level) * float(np.interp(speed, self._speeds, self._other))
 
     def temperature_c(self, viscosity_m2_s: float) -> float:
         """
@@ -273,5 +306,7 @@ def oil_allowance(table: FrictionTable, viscosity_m2_s: float, oil: WaltherVisco
         where it is measured, and the drift.
 
     """
-    band = band_friction_nm(table, viscosity_m2_s, oil, band_c if viscosity_assumed else 0.0)
-    return OilAllowance(*band, None if viscosity_assumed else oil, drift_per_k, band_c)
+    speeds, valve_plate, other = band_friction_nm(table, viscosity_m2_s, oil,
+                                                  band_c if viscosity_assumed else 0.0)
+    return OilAllowance(speeds, valve_plate, None if viscosity_assumed else oil, drift_per_k,
+                        band_c, other)

@@ -376,8 +376,9 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               'std holds the truth (other: where all other components share one factor; '
               'an intermittent fault: the factor the isolation memory holds at the end), of the '
               'runs whose interval has an upper end (one without, std inf, holds any truth: '
-              'counted apart, "n unbounded"); the truth is against the pump the baseline '
-              'holds (learnt after an onset: the fault over what it held then), and a run '
+              'counted apart, "n unbounded"); the valve-plate truth is against the pump the '
+              'baseline holds (learnt after an onset: the fault over what it held then), and '
+              'a run '
               'whose baseline was never learnt, its scale the pump against the model and not '
               'a change, is left out of err and cov ("n never learnt"). '
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')

@@ -43,12 +43,15 @@ def commissioned_factor(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.nd
     s^2-weighted mean of the factor there (s the cause's healthy friction magnitude), and
     the truth a scale is held to is the factor at the end over it. (A step inside that
     stretch makes the halves disagree and commissioning start again, so the stretch
-    rarely straddles one.)
+    rarely straddles one.) The samples are those of running at the true speed and
+    acceleration (the simulation's gate): the monitor also leaves out ``monitor_settle_s``
+    after each acceleration and short windows, so its stretch of learnt running reaches a
+    little further back in time than this one; for a ramp the truth is then a little high.
 
     Parameters
     ----------
     t_s : ndarray
-        Times of the samples the monitor takes [s], increasing.
+        Times of the running samples [s], increasing.
     factor : ndarray
         The fault's factor at them [-].
     signature_nm : ndarray
