@@ -143,8 +143,12 @@ def test_every_case_of_the_scales_carries_the_interval_over_the_unseen_healthy_l
             assert after[k] == 1.0
             assert new[1] == pytest.approx(with_unseen_level(*old, unseen)[1], rel=1e-12)
             assert new[0] == pytest.approx(-new[1], rel=1e-12)
-        else:
-            assert new == pytest.approx(with_unseen_level(*old, unseen), rel=1e-12)
+        else:  # the change as read, +- what holds its interval over every healthy level
+            middle, ends = before[k] - 1.0, with_unseen_level(*old, unseen)
+            assert after[k] == pytest.approx(before[k], rel=1e-12)
+            half = max(ends[1] - middle, middle - ends[0])
+            assert new == pytest.approx((middle - half, middle + half), rel=1e-12)
+            assert new[0] <= ends[0] + 1e-12 and new[1] >= ends[1] - 1e-12
         assert new[0] <= old[0] and new[1] >= old[1]  # it holds the interval over the baseline
         assert unseen == 0.0 or new[1] - new[0] > old[1] - old[0] or new == old
 

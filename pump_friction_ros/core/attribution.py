@@ -435,14 +435,16 @@ class FaultIsolation:
                     if oil_now > 0.0:
                         now_low, now_high = now_low - oil_now, now_high + oil_now
                     low, high = min(low, now_low), max(high, now_high)
-                low, high = with_unseen_level(low, high, u)
             elif confirmed and verdict == Verdict.CANNOT_TELL:
-                low, high = with_unseen_level(min(0.0, low), max(0.0, high), u)
+                low, high = min(0.0, low), max(0.0, high)
             else:  # no change confirmed: 1, +- whatever might be there
-                half = max(-low, high, float(undetectable[i]))
-                high = with_unseen_level(-half, half, u)[1]
-                low, point = -high, 0.0
-            out += [1.0 + 0.5 * (low + high), 0.5 * (high - low) / Z95] if math.isfinite(
+                low = -max(-low, high, float(undetectable[i]))
+                high, point = -low, 0.0
+            # the middle as read, +- what holds the range over every healthy level within u
+            # (its ends divide by 1 -+ u: their middle stood far above the reading near u = 1)
+            middle = 0.5 * (low + high)
+            low, high = with_unseen_level(low, high, u)
+            out += [1.0 + middle, max(high - middle, middle - low) / Z95] if math.isfinite(
                 high) else [1.0 + point, math.inf]  # healthy level unknown: no upper end
         return out[0], out[1], out[2], out[3]
 
