@@ -438,11 +438,9 @@ class FaultIsolation:
             elif confirmed and verdict == Verdict.CANNOT_TELL:
                 low, high = min(0.0, low), max(0.0, high)
             else:  # no change confirmed: 1, +- whatever might be there
-                low = -max(-low, high, float(undetectable[i]))
-                high, point = -low, 0.0
-            # the middle as read, +- what holds the range over every healthy level within u
-            # (its ends divide by 1 -+ u: their middle stood far above the reading near u = 1)
-            middle = 0.5 * (low + high)
+                high, point = max(-low, high, float(undetectable[i])), 0.0
+                low = -high
+            middle = 0.5 * (low + high)  # as read, +- what holds it over the levels within u
             low, high = with_unseen_level(low, high, u)
             out += [1.0 + middle, max(high - middle, middle - low) / Z95] if math.isfinite(
                 high) else [1.0 + point, math.inf]  # healthy level unknown: no upper end
