@@ -29,19 +29,18 @@ from pump_friction_ros.evaluation.bank import (
     valve_plate_truth,
 )
 from pump_friction_ros.evaluation.closed_loop import Plant, Setpoints, simulate_closed_loop
-from pump_friction_ros.evaluation.eha_scenarios import (
-    draw_eha,
-    eha_estimator_config,
-    fault_factor,
-    memory_weighted_factor,
-    memory_weighted_since,
-)
+from pump_friction_ros.evaluation.eha_scenarios import draw_eha, eha_estimator_config, fault_factor
 from pump_friction_ros.evaluation.eha_settings import SensorSettings
 from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario, SimulatedScenario
 from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
 from pump_friction_ros.evaluation.settings import FAMILIES, FAULTS, FULL, QUICK
 from pump_friction_ros.evaluation.true_pump import PumpVariant, true_table
-from pump_friction_ros.evaluation.truths import commissioned_factor, commissioned_since
+from pump_friction_ros.evaluation.truths import (
+    commissioned_factor,
+    commissioned_since,
+    memory_weighted_factor,
+    memory_weighted_since,
+)
 from pump_friction_ros.physics.friction import valve_plate_viscous_torque_nm
 from pump_friction_ros.physics.model import COMPONENTS
 from pump_friction_ros.physics.oil import WaltherViscosity

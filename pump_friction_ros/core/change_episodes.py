@@ -58,7 +58,7 @@ In this mode the verdict is the single causes' GLR on the windows that show the 
 without the line per cause, the baseline's bias and the unlearnt drift that
 ``friction_choice`` fits (they describe a change that stays). The reported scales stay those
 of every window (the memory's mean since the change began, the truth an intermittent
-fault's estimate is held to, ``evaluation.eha_scenarios.memory_weighted_since``), their
+fault's estimate is held to, ``evaluation.truths.memory_weighted_since``), their
 intervals widened where a line through them is significant as for any change
 (conservative: a line through on and off says little); the verdict says the change's size
 while it shows and the share of the change's windows (memory-weighted) that show it.

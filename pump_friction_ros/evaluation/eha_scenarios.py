@@ -53,15 +53,14 @@ from .sensors import (
 )
 from .settings import Fault
 from .true_pump import pump_variants, PumpVariant, true_table
-from .truths import commissioned_since
+from .truths import commissioned_since, memory_weighted_since
 from ..core.node_parameters import EstimatorConfig, ViscositySource
 from ..physics.model import COMPONENTS
 from ..physics.oil import WaltherViscosity
 from ..physics.pump_parameters import load_pump
 from ..table.friction_table import FrictionTable
 
-__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor',
-           'memory_weighted_factor', 'memory_weighted_since', 'oil_temperature',
+__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor', 'oil_temperature',
            'simulate_eha']
 
 _PLANT_STREAM = 2  # sub-stream of the scenario's seed for the draws (the noise: its own)
@@ -226,75 +225,6 @@ def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp
         on = not on
     inside = np.searchsorted(np.array(edges), t, side='right')
     return np.where(inside % 2 == 1, value, 1.0)  # odd: inside an 'on' episode
-
-
-def memory_weighted_factor(factor: np.ndarray, signature_nm: np.ndarray, taken: np.ndarray,
-                           dt_s: float, memory_s: float) -> float:
-    """
-    Return the friction factor the isolation's memory holds at the end of a run.
-
-    The isolation estimates a cause's change as sum s d / sum s^2 over its windows, older
-    ones weighted by exp(-age / memory) in monitored running (``attribution``). With
-    d = (f - 1) s that is the s^2- and memory-weighted mean of f: the truth an intermittent
-    fault's estimate can be held to (the factor at the end is on or off by chance).
-
-    Parameters
-    ----------
-    factor : ndarray
-        The fault's factor per sample [-].
-    signature_nm : ndarray
-        The cause's healthy friction magnitude per sample [N m].
-    taken : ndarray of bool
-        Samples the monitor takes (running, after the onset).
-    dt_s : float
-        Sample period [s].
-    memory_s : float
-        ``isolation_memory_s`` [s of monitored running].
-
-    Returns
-    -------
-    float
-        The weighted factor (the factor at the end where no sample is taken).
-
-    """
-    if not taken.any():
-        return float(factor[-1])
-    age = (np.count_nonzero(taken) - np.cumsum(taken)[taken]) * dt_s
-    weight = np.exp(-age / memory_s) * signature_nm[taken] ** 2
-    return float(np.sum(weight * factor[taken]) / np.sum(weight))
-
-
-def memory_weighted_since(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.ndarray,
-                          dt_s: float, memory_s: float, start_s: float) -> float:
-    """
-    Return `memory_weighted_factor` over the samples taken from ``start_s`` on.
-
-    The isolation's sums start afresh when both CUSUMs are back at zero (``attribution``):
-    an intermittent fault whose change cleared between its episodes is estimated from the
-    change under way at the end only, the monitor's ``change_start_s`` on.
-
-    Parameters
-    ----------
-    t_s : ndarray
-        Times of the samples the monitor takes after the onset [s] (at least one).
-    factor : ndarray
-        The fault's factor at them [-].
-    signature_nm : ndarray
-        The cause's healthy friction magnitude at them [N m].
-    dt_s : float
-        Sample period [s].
-    memory_s : float
-        ``isolation_memory_s`` [s of monitored running].
-    start_s : float
-        Where the change under way began [s] (-inf: the onset).
-
-    Returns
-    -------
-    float
-        The weighted factor (the last given sample's where none is from ``start_s`` on).
-
-    """
-    return memory_weighted_factor(factor, signature_nm, t_s >= start_s, dt_s, memory_s)
 
 
 def _ratio(true: np.ndarray, model: np.ndarray) -> float:

@@ -131,7 +131,7 @@ class SimulatedScenario:
     vp_truth_since: Callable[[float], float] | None = None
     """An intermittent fault's valve-plate truth over the change a monitor in alarm reads at
     the end: the factor over the isolation's memory of the running since that change began
-    (the stamp given [s]; ``eha_scenarios.memory_weighted_since``). None: `vp_truth`."""
+    (the stamp given [s]; ``truths.memory_weighted_since``). None: `vp_truth`."""
     vp_commissioned: Callable[[float], float] | None = None
     """The valve-plate factor the healthy baseline holds where it was learnt at the stamp
     given [s], after the onset (`commissioned_factor`); None: the valve plate never

@@ -18,7 +18,9 @@ The truths a bank run's readings are held to, where they are not the fault's fac
 The monitor publishes each friction cause's change from its healthy baseline (1: as at
 commissioning). Where commissioning completed after a fault's onset, the baseline holds the
 fault, in part or whole, and the change the monitor can see is the factor over the one the
-baseline holds (`commissioned_factor`; ``bank.valve_plate_truth``).
+baseline holds (`commissioned_factor`; ``bank.valve_plate_truth``). The isolation's
+estimate of a change weighs its windows by a memory, so a change that comes and goes is held
+to the factor its memory holds (`memory_weighted_factor`, `memory_weighted_since`).
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ from functools import partial
 
 import numpy as np
 
-__all__ = ['commissioned_factor', 'commissioned_since']
+__all__ = ['commissioned_factor', 'commissioned_since', 'memory_weighted_factor',
+           'memory_weighted_since']
 
 
 def commissioned_factor(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.ndarray,
@@ -108,3 +111,72 @@ def commissioned_since(factor: np.ndarray | float, t_s: np.ndarray, signature_nm
     dt = float(t_s[1] - t_s[0])
     return partial(commissioned_factor, t_s[running], np.asarray(factor)[running],
                    np.abs(signature_nm[running]), dt, learn_s)
+
+
+def memory_weighted_factor(factor: np.ndarray, signature_nm: np.ndarray, taken: np.ndarray,
+                           dt_s: float, memory_s: float) -> float:
+    """
+    Return the friction factor the isolation's memory holds at the end of a run.
+
+    The isolation estimates a cause's change as sum s d / sum s^2 over its windows, older
+    ones weighted by exp(-age / memory) in monitored running (``attribution``). With
+    d = (f - 1) s that is the s^2- and memory-weighted mean of f: the truth an intermittent
+    fault's estimate can be held to (the factor at the end is on or off by chance).
+
+    Parameters
+    ----------
+    factor : ndarray
+        The fault's factor per sample [-].
+    signature_nm : ndarray
+        The cause's healthy friction magnitude per sample [N m].
+    taken : ndarray of bool
+        Samples the monitor takes (running, after the onset).
+    dt_s : float
+        Sample period [s].
+    memory_s : float
+        ``isolation_memory_s`` [s of monitored running].
+
+    Returns
+    -------
+    float
+        The weighted factor (the factor at the end where no sample is taken).
+
+    """
+    if not taken.any():
+        return float(factor[-1])
+    age = (np.count_nonzero(taken) - np.cumsum(taken)[taken]) * dt_s
+    weight = np.exp(-age / memory_s) * signature_nm[taken] ** 2
+    return float(np.sum(weight * factor[taken]) / np.sum(weight))
+
+
+def memory_weighted_since(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.ndarray,
+                          dt_s: float, memory_s: float, start_s: float) -> float:
+    """
+    Return `memory_weighted_factor` over the samples taken from ``start_s`` on.
+
+    The isolation's sums start afresh when both CUSUMs are back at zero (``attribution``):
+    an intermittent fault whose change cleared between its episodes is estimated from the
+    change under way at the end only, the monitor's ``change_start_s`` on.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Times of the samples the monitor takes after the onset [s] (at least one).
+    factor : ndarray
+        The fault's factor at them [-].
+    signature_nm : ndarray
+        The cause's healthy friction magnitude at them [N m].
+    dt_s : float
+        Sample period [s].
+    memory_s : float
+        ``isolation_memory_s`` [s of monitored running].
+    start_s : float
+        Where the change under way began [s] (-inf: the onset).
+
+    Returns
+    -------
+    float
+        The weighted factor (the last given sample's where none is from ``start_s`` on).
+
+    """
+    return memory_weighted_factor(factor, signature_nm, t_s >= start_s, dt_s, memory_s)
