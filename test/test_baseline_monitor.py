@@ -149,8 +149,9 @@ def test_a_friction_change_reads_oil_viscosity_too_when_the_viscosity_is_assumed
         assert ('oil viscosity' in words) == assumed
 
 
-def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which():
-    mon = monitor()
+@pytest.mark.parametrize('assumed', [False, True])
+def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which(assumed):
+    mon = monitor(viscosity_assumed=assumed)
     rng = np.random.default_rng(6)
     t = 0.0
     for k in range(480):  # other friction always 2x the valve plate's: one shape
@@ -165,6 +166,9 @@ def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which():
     verdict, words = mon.verdict(1.0)
     assert verdict == Verdict.CANNOT_TELL
     assert 'valve plate' in words and 'other friction' in words and 'on this duty cycle' in words
+    # a colder oil raises both frictions: with its viscosity a parameter it is named too
+    assert words.endswith('; or oil viscosity (the viscosity is a parameter: no temperature '
+                          'topic)') == assumed, words
     # either could have changed: each interval holds its truth (x1.8 and x1), and the
     # valve plate's holds 1 as well (the change might be the other friction's)
     low, high = (mon.theta_vp + z * 1.96 * mon.valve_plate_scale_std for z in (-1, 1))

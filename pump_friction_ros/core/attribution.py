@@ -75,6 +75,7 @@ from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 %
 from .friction_choice import choose_friction
 from .healthy_level import interval, with_unseen_level
 from .signatures import signature_matrix  # (the isolation's: exported here)
+from .verdict_words import friction_named, with_oil, WORDS as _WORDS
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -86,10 +87,6 @@ _N = len(CAUSES)
 MIN_LEVEL = 0.2
 """The uncertainty of a reported scale divides by the learnt friction level; a level below
 this times the model's is taken at it (a guard of the division, not a figure of the pump)."""
-_WORDS = {'valve_plate': 'valve plate', 'other_friction': 'other friction (bearing, '
-          'joints, piston heads)', 'torque_gain': 'torque-measurement gain',
-          'pressure_gain': 'pressure-sensor gain', 'torque_offset': 'torque offset',
-          'drive_loss': 'drive loss'}
 
 
 class Verdict:
@@ -291,7 +288,7 @@ class FaultIsolation:
         if episodic:
             stats = self.episodes.on
         t, delta, _ = self.evidence(episodic)
-        z2 = self.settings.attribution_z ** 2
+        z2, assumed = self.settings.attribution_z ** 2, self.viscosity_assumed
         order = [int(i) for i in np.argsort(-np.nan_to_num(t, nan=-1.0))]
         j, k = order[0], order[1]
         if not t[j] >= z2:
@@ -310,20 +307,22 @@ class FaultIsolation:
             j, k, t, cos = choice.first, choice.second, choice.t, choice.cos
             split = choice.split
             if split is not None and max(abs(split[0] - split[1]), abs(split[2] - split[3])) >= z2:
-                return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[_VP]]} or '
-                        f'{_WORDS[CAUSES[_OTHER]]}: the choice turns on whether the baseline '
-                        'was already off before the change (evidence: valve plate {:.0f} '
-                        'against other friction {:.0f} with that bias fitted, {:.0f} against '
-                        '{:.0f} without)'.format(*split), -1)
+                return (Verdict.CANNOT_TELL, with_oil(
+                    f'{_WORDS[CAUSES[_VP]]} or {_WORDS[CAUSES[_OTHER]]}: the choice turns on '
+                    'whether the baseline was already off before the change (evidence: valve '
+                    'plate {:.0f} against other friction {:.0f} with that bias fitted, {:.0f} '
+                    'against {:.0f} without)'.format(*split), CAUSES[:2], assumed), -1)
             close = not t[j] - t[k] >= z2
             tied = close and abs(cos) >= self.settings.identifiability_correlation
+        pair = (CAUSES[j], CAUSES[k])
         if tied:
-            return (Verdict.CANNOT_TELL, f'cannot tell {_WORDS[CAUSES[j]]} from '
-                    f'{_WORDS[CAUSES[k]]} on this duty cycle (signatures correlated '
-                    f'{cos:+.3f} over the points seen)', -1)
+            return (Verdict.CANNOT_TELL, with_oil(
+                f'cannot tell {_WORDS[pair[0]]} from {_WORDS[pair[1]]} on this duty cycle '
+                f'(signatures correlated {cos:+.3f} over the points seen)', pair, assumed), -1)
         if close:
-            return (Verdict.CANNOT_TELL, f'{_WORDS[CAUSES[j]]} or {_WORDS[CAUSES[k]]}: not '
-                    f'yet told apart (evidence {t[j]:.0f} against {t[k]:.0f})', -1)
+            return (Verdict.CANNOT_TELL, with_oil(
+                f'{_WORDS[pair[0]]} or {_WORDS[pair[1]]}: not yet told apart (evidence '
+                f'{t[j]:.0f} against {t[k]:.0f})', pair, assumed), -1)
         episodes = ''
         if episodic:
             episodes = (f'it comes and goes, shown in {100.0 * self.episodes.fraction():.0f} '
@@ -341,17 +340,7 @@ class FaultIsolation:
             if line is not None:
                 scale += (f', {1.0 + line[0]:.2f} now and '
                           f'{"rising" if line[2] < 0.0 else "falling"}')
-        if j == _VP:
-            name = f'valve plate ({scale})'
-            if self.viscosity_assumed:
-                name = ('valve plate or oil viscosity (the viscosity is a parameter: no '
-                        f'temperature topic) ({scale})')
-        else:
-            name = f'not the valve plate: other friction ({scale})'
-            if self.viscosity_assumed:  # the bearing's drag follows the oil too
-                name = ('not the valve plate: other friction or oil viscosity (the viscosity '
-                        f'is a parameter: no temperature topic) ({scale})')
-        return _CLASS[j], name, j
+        return _CLASS[j], friction_named(CAUSES[j], scale, assumed), j
 
     def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool,
                oil_moved: bool = False) -> tuple[float, float, float, float]:
