@@ -162,10 +162,8 @@ def memory_weighted_since(t_s: np.ndarray, factor: np.ndarray, signature_nm: np.
     ----------
     t_s : ndarray
         Times of the samples the monitor takes after the onset [s] (at least one).
-    factor : ndarray
-        The fault's factor at them [-].
-    signature_nm : ndarray
-        The cause's healthy friction magnitude at them [N m].
+    factor, signature_nm : ndarray
+        The fault's factor [-] and the cause's healthy friction magnitude [N m] at them.
     dt_s : float
         Sample period [s].
     memory_s : float
