@@ -75,7 +75,7 @@ from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 %
 from .friction_choice import choose_friction
 from .healthy_level import interval, with_unseen_level
 from .signatures import signature_matrix  # (the isolation's: exported here)
-from .verdict_words import friction_named, with_oil, WORDS as _WORDS
+from .verdict_words import friction_named, FRICTIONS, with_oil, WORDS as _WORDS
 
 __all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
 
@@ -311,7 +311,7 @@ class FaultIsolation:
                     f'{_WORDS[CAUSES[_VP]]} or {_WORDS[CAUSES[_OTHER]]}: the choice turns on '
                     'whether the baseline was already off before the change (evidence: valve '
                     'plate {:.0f} against other friction {:.0f} with that bias fitted, {:.0f} '
-                    'against {:.0f} without)'.format(*split), CAUSES[:2], assumed), -1)
+                    'against {:.0f} without)'.format(*split), FRICTIONS, assumed), -1)
             close = not t[j] - t[k] >= z2
             tied = close and abs(cos) >= self.settings.identifiability_correlation
         pair = (CAUSES[j], CAUSES[k])

@@ -49,12 +49,13 @@ import numpy as np
 
 from .attribution import FaultIsolation, Verdict
 from .baseline import Baseline
+from .verdict_words import FRICTIONS
 
 __all__ = ['FOLLOWED', 'OilFollow', 'followed', 'friction_fall']
 
-FOLLOWED = ('valve_plate', 'other_friction')
-"""The frictions that follow the oil: the first two of `attribution.CAUSES` and of
-`baseline.BASELINE_TERMS` (their levels l = 1 + b)."""
+FOLLOWED = FRICTIONS
+"""The frictions that follow the oil (``verdict_words.FRICTIONS``): the first two of
+`attribution.CAUSES` and of `baseline.BASELINE_TERMS` (their levels l = 1 + b)."""
 
 
 def followed(baseline: Baseline, factors: np.ndarray) -> Baseline:
