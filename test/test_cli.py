@@ -14,9 +14,11 @@
 
 """The pump_friction command line: exact JSON keys, unit conversion at the edge, bad input."""
 
+import importlib.metadata
 import json
 import math
 from pathlib import Path
+import re
 import struct
 
 from pump_friction_ros.app.cli import main
@@ -32,6 +34,17 @@ def run(capsys, *argv):
     code = main(list(argv))
     out, err = capsys.readouterr()
     return code, out, err
+
+
+def test_version_is_the_one_of_the_distribution_and_of_package_xml(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(['--version'])
+    assert stop.value.code == 0
+    printed = capsys.readouterr().out.split()
+    package_xml = (Path(__file__).parents[1] / 'package.xml').read_text(encoding='utf-8')
+    in_xml = re.search(r'<version>([^<]+)</version>', package_xml).group(1)
+    assert printed[:2] == ['pump_friction', importlib.metadata.version('pump_friction_ros')]
+    assert printed[1] == in_xml
 
 
 def test_torque_json_has_exactly_the_documented_keys_and_adds_up(capsys):

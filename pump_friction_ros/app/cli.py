@@ -29,6 +29,7 @@ import numpy as np
 from . import data_commands
 from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
+from .. import __version__, MODEL_VERSION
 from ..errors import PumpFrictionError
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
@@ -285,6 +286,8 @@ def build_parser() -> argparse.ArgumentParser:
     """
     parser = Parser(prog='pump_friction',
                     description='Bent-axis pump friction model (Hong & Doh 2004).')
+    parser.add_argument('--version', action='version',
+                        version=f'%(prog)s {__version__} (model {MODEL_VERSION})')
     sub = parser.add_subparsers(dest='command', required=True, parser_class=Parser)
 
     p = sub.add_parser('paper-check', help="the paper's numbers next to the model's")
