@@ -25,10 +25,16 @@ from pump_friction_ros.physics.pump_parameters import load_pump
 import pytest
 
 # The rclpy tests talk DDS: on this machine only, in a domain of this run's own (two runs at
-# once, or a robot on domain 0, must not hear each other), logs in a temporary folder. Set
-# before any test module imports rclpy; a value already in the environment is kept.
-os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-os.environ.setdefault('ROS_DOMAIN_ID', str(os.getpid() % 100 + 1))
+# once, or the robot a shell was set up for, must not hear each other: the tests publish
+# joint states and start nodes named torque_estimator), logs in a temporary folder. Set
+# before any test module imports rclpy, overriding the shell's: its domain is never used.
+_SHELL_DOMAIN = os.environ.get('ROS_DOMAIN_ID', '0')
+_DOMAIN = os.getpid() % 100 + 1
+if str(_DOMAIN) == _SHELL_DOMAIN:
+    _DOMAIN = _DOMAIN % 100 + 1
+os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.pop('ROS_STATIC_PEERS', None)
 if 'ROS_LOG_DIR' not in os.environ:
     os.environ['ROS_LOG_DIR'] = tempfile.mkdtemp(prefix='pump_friction_ros_log_')
     atexit.register(shutil.rmtree, os.environ['ROS_LOG_DIR'], ignore_errors=True)

@@ -18,9 +18,12 @@ launch_testing: the node starts from its parameters file, answers, and shuts dow
 Needs a sourced ROS 2 Jazzy (launch_testing, rclpy); skipped with the reason otherwise.
 """
 
+import atexit
 import os
 from pathlib import Path
+import shutil
 import sys
+import tempfile
 import time
 import unittest
 
@@ -41,6 +44,8 @@ from sensor_msgs.msg import FluidPressure, JointState  # noqa: E402
 from std_msgs.msg import Float64, Header  # noqa: E402
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'torque_estimator.yaml'
+ROS_HOME = tempfile.mkdtemp(prefix='pump_friction_ros_launch_test_')
+atexit.register(shutil.rmtree, ROS_HOME, ignore_errors=True)
 
 
 @pytest.mark.launch_test
@@ -48,8 +53,10 @@ def generate_test_description():
     # The node's start-up line comes from its rclpy logger, which rcutils writes to stderr
     # (RCUTILS_LOGGING_USE_STDOUT 0 or unset), unbuffered with RCUTILS_LOGGING_BUFFERED_STREAM
     # 0 (1 would ask for line buffering): pinned here whatever the calling shell has set.
+    # Its own ROS_HOME: the node's default baseline file (under ROS_HOME) is not the one of a
+    # torque_estimator on this machine (conftest.py gives the tests their own DDS domain).
     env = dict(os.environ, RCUTILS_LOGGING_USE_STDOUT='0', RCUTILS_LOGGING_BUFFERED_STREAM='0',
-               PYTHONUNBUFFERED='1')
+               PYTHONUNBUFFERED='1', ROS_HOME=ROS_HOME)
     node = launch.actions.ExecuteProcess(
         cmd=[sys.executable, '-m', 'pump_friction_ros.node', '--ros-args',
              '--params-file', str(PARAMS)],

@@ -124,3 +124,23 @@ def test_a_signal_during_start_up_stops_it_cleanly(table_file, tmp_path, delay_s
     assert proc.returncode == 0, text
     assert 'Traceback' not in text and 'KeyboardInterrupt' not in text, text
     assert len([line for line in text.splitlines() if 'stopping on SIGINT' in line]) == 1, text
+
+
+@pytest.mark.parametrize('override, named', [
+    ('use_sim_time:=1', 'use_sim_time'),  # rclpy's own parameter: a bool given as an integer
+    ('max_stamp_lead_s:=1', 'max_stamp_lead_s'),  # a double given as an integer
+    ('output_decimation:=0', 'output_decimation'),  # out of its range
+])
+def test_a_refused_start_up_exits_1_with_one_line_naming_the_parameter(
+        table_file, tmp_path, override, named):
+    env = dict(os.environ, RCUTILS_LOGGING_BUFFERED_STREAM='0', PYTHONUNBUFFERED='1',
+               ROS_LOG_DIR=str(tmp_path / 'log'))
+    env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
+    proc = subprocess.run(
+        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args', '--params-file',
+         str(PARAMS), '-p', f'table_file:={table_file}', '-p', override],
+        env=env, capture_output=True, timeout=60)
+    lines = proc.stderr.decode(errors='replace').splitlines()
+    assert proc.returncode == 1, lines
+    assert len(lines) == 1 and lines[0].startswith('torque_estimator: cannot start:'), lines
+    assert named in lines[0]

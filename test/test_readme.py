@@ -42,7 +42,10 @@ def _text(value):
         return 'true' if value else 'false'
     if isinstance(value, str):
         return repr(value)
-    return f'{value:g}'
+    text = f'{value:g}'
+    if isinstance(value, float) and text.lstrip('-').isdigit():
+        return f'{text}.0'  # a double as a params file or -p must give it: 1.0, not 1
+    return text
 
 
 def parameter_rows():

@@ -34,7 +34,11 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidParameterTypeException, InvalidParameterValueException
+from rclpy.exceptions import (
+    InvalidParameterTypeException,
+    InvalidParameterValueException,
+    ParameterException,
+)
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 import rclpy.logging
 from rclpy.node import Node
@@ -143,7 +147,10 @@ class TorqueEstimatorNode(Node):
     """Subscribes to shaft speed, pressure and motor torque; publishes the estimates."""
 
     def __init__(self, **node_kwargs: Any) -> None:
-        super().__init__(NODE_NAME, **node_kwargs)
+        try:  # rclpy's own parameters (use_sim_time:=1 is an integer, not a bool)
+            super().__init__(NODE_NAME, **node_kwargs)
+        except ParameterException as exc:
+            raise PumpFrictionError(str(exc)) from None
         values = {}
         for spec in PARAMETERS:
             try:
@@ -312,6 +319,7 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
     # fails in its constructor (and then in its __del__, with a traceback on stderr).
     executor = SingleThreadedExecutor()
     node = None
+    refused = False
     try:
         if not stop.received:  # else a signal came before rclpy's handler was there
             node = TorqueEstimatorNode()
@@ -319,6 +327,7 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
             executor.spin()
     except PumpFrictionError as exc:
         print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
+        refused = True  # that line is the whole story: no 'stopping on' after it
         return 1
     except ExternalShutdownException:
         pass
@@ -339,7 +348,8 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
         # publisher died with the context)
         if unsaved:
             rclpy.logging.get_logger(logger).warning(unsaved)
-        rclpy.logging.get_logger(logger).info(f'stopping on {why}')
+        if not refused:
+            rclpy.logging.get_logger(logger).info(f'stopping on {why}')
         rclpy.try_shutdown()
     return 0
 
