@@ -246,6 +246,21 @@ def _document_with(table, **changes):
     return yaml.safe_dump(doc)
 
 
+def _document_mapped(table, dotted, change):
+    """Return a learnt document whose entry at ``dotted`` is ``change(entry)``."""
+    doc = baseline_document(learnt_core(table))
+    *parents, key = dotted.split('.')
+    inner = doc
+    for name in parents:
+        inner = inner[name]
+    inner[key] = change(inner[key])
+    return yaml.safe_dump(doc)
+
+
+def _negative_definite(rows):
+    return [[-1.0 if i == j else 0.0 for j in range(len(rows))] for i in range(len(rows))]
+
+
 BROKEN = {
     'not_yaml': lambda table: 'format: [unclosed\n',
     'empty': lambda table: '',
@@ -258,6 +273,21 @@ BROKEN = {
     'samples': lambda table: _document_with(table, **{'learnt.samples': -3}),
     'stamp': lambda table: _document_with(table, **{'learnt.first_stamp_ns': 'yesterday'}),
     'provenance': lambda table: _document_with(table, provenance=[1, 2]),
+    # finite but impossible: each would crash a node that took it (a negative variance
+    # under a square root), or is not what this package writes
+    'variance_negative': lambda table: _document_with(
+        table, **{'monitor_state.ewma_var_nm2': -1.0}),
+    'cusum_negative': lambda table: _document_mapped(
+        table, 'monitor_state.cusum_pos_nm_s', lambda sums: [-1.0] * len(sums)),
+    'gram_not_positive': lambda table: _document_mapped(
+        table, 'monitor_state.commissioning.learner.a', _negative_definite),
+    'windows_fraction': lambda table: _document_with(table, **{'monitor_state.windows': 2.5}),
+    'complete_not_bool': lambda table: _document_with(
+        table, **{'monitor_state.baseline_complete': 'yes'}),
+    'stamps_reversed': lambda table: _document_mapped(
+        table, 'learnt', lambda learnt: {**learnt, 'first_stamp_ns': learnt['last_stamp_ns'] + 1}),
+    'stamp_beyond_int64': lambda table: _document_with(
+        table, **{'learnt.last_stamp_ns': 10**30}),
 }
 
 

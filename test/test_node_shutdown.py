@@ -144,3 +144,24 @@ def test_a_refused_start_up_exits_1_with_one_line_naming_the_parameter(
     assert proc.returncode == 1, lines
     assert len(lines) == 1 and lines[0].startswith('torque_estimator: cannot start:'), lines
     assert named in lines[0]
+
+
+@pytest.mark.parametrize('arguments', [
+    ['--params-file', '{tmp}/missing.yaml'],
+    ['--params-file', '{tmp}/broken.yaml'],  # YAML that does not parse
+    ['-r', '__ns:=not.a.namespace'],
+])
+def test_a_command_line_rcl_refuses_exits_1_with_our_line_and_no_traceback(tmp_path, arguments):
+    """rclpy.init fails (rcl logs its own line first): one line of ours, no traceback."""
+    (tmp_path / 'broken.yaml').write_text('torque_estimator: [\n')
+    env = dict(os.environ, ROS_LOG_DIR=str(tmp_path / 'log'))
+    env['PYTHONPATH'] = os.pathsep.join([str(REPO), env.get('PYTHONPATH', '')])
+    proc = subprocess.run(
+        [sys.executable, '-m', 'pump_friction_ros.node', '--ros-args',
+         *[a.format(tmp=tmp_path) for a in arguments]],
+        env=env, capture_output=True, timeout=60)
+    text = proc.stderr.decode(errors='replace')
+    ours = [line for line in text.splitlines() if line.startswith('torque_estimator:')]
+    assert proc.returncode == 1, text
+    assert 'Traceback' not in text and len(ours) == 1, text
+    assert ours[0].startswith('torque_estimator: cannot start: failed to initialize rcl'), text

@@ -67,7 +67,7 @@ import math
 
 import numpy as np
 
-from .baseline import Baseline, read_sums
+from .baseline import Baseline, read_count, read_sums
 from .change_episodes import ChangeEpisodes
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
@@ -460,14 +460,14 @@ class FaultIsolation:
 
         """
         (g, b), (c, count) = read_sums(state, {'g': (_N, _N), 'b': (_N,)}, ('c', 'count'),
-                                       'isolation')
+                                       'isolation', grams=('g',))
         # sums that came later: a file without them, from the next window on (the oil
         # band's: no band until now; the bias's: none while a change under way lasts)
         (g1, g2, b1), _ = read_sums(state, {'g1': (_N,), 'g2': (_N,), 'b1': (_N,)}, (),
                                     'isolation') if 'g1' in state else ([np.zeros(_N)] * 3, [])
         (bv, bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
             if 'bv' in state else ([np.zeros(_N)] * 2, [])
-        windows = int(state['windows'])  # type: ignore[call-overload]
+        windows = read_count(state, 'windows', 'isolation')
         drift, bias = DriftNuisance(_N), FrictionBias()
         if 'drift' in state:
             drift.load(state['drift'])  # type: ignore[arg-type]

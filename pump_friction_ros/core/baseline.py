@@ -53,7 +53,7 @@ import math
 import numpy as np
 
 __all__ = ['BASELINE_TERMS', 'Baseline', 'BaselineLearner', 'baseline_regressors',
-           'read_sums', 'spd_inverse']
+           'is_gram', 'read_count', 'read_sums', 'spd_inverse']
 
 BASELINE_TERMS = ('valve_plate', 'other_friction', 'drive_loss_nm', 'torque_offset_nm',
                   'torque_gain', 'rotor_inertia_kg_m2')
@@ -173,8 +173,62 @@ class Baseline:
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
 
 
+def is_gram(x: np.ndarray) -> bool:
+    """
+    Tell whether a square array can be a sum of weighted outer products w s s^T (w >= 0).
+
+    Such a sum is symmetric and positive semi-definite; a saved one that is not was not
+    written by this package, and would put a negative variance under a square root.
+
+    Parameters
+    ----------
+    x : ndarray
+        Square array.
+
+    Returns
+    -------
+    bool
+        Symmetric and no eigenvalue below -1e-6 of its largest diagonal entry (rounding).
+
+    """
+    scale = float(np.max(np.abs(np.diag(x)), initial=0.0))
+    if not np.array_equal(x, x.T) and not np.allclose(x, x.T, rtol=0.0, atol=1e-9 * scale):
+        return False
+    return x.size == 0 or float(np.linalg.eigvalsh(0.5 * (x + x.T))[0]) >= -1e-6 * scale
+
+
+def read_count(state: dict[str, object], key: str, what: str) -> int:
+    """
+    Read a persisted count: an integer >= 0 (not a bool, not 2.5).
+
+    Parameters
+    ----------
+    state : dict
+        The saved values.
+    key : str
+        The count's name.
+    what : str
+        Whose count, for the message.
+
+    Returns
+    -------
+    int
+        The count.
+
+    Raises
+    ------
+    ValueError
+        Missing, or not a count.
+
+    """
+    value = state[key]
+    if type(value) is not int or value < 0:
+        raise ValueError(f'{what} {key}: expected a count, got {value!r}')
+    return value
+
+
 def read_sums(state: dict[str, object], arrays: dict[str, tuple[int, ...]],
-              scalars: tuple[str, ...], what: str
+              scalars: tuple[str, ...], what: str, grams: tuple[str, ...] = ()
               ) -> tuple[list[np.ndarray], list[float]]:
     """
     Read persisted weighted sums back: arrays of known shape and non-negative scalars.
@@ -189,6 +243,8 @@ def read_sums(state: dict[str, object], arrays: dict[str, tuple[int, ...]],
         Names of the scalar sums (weights, counts, sums of squares: >= 0).
     what : str
         Whose sums, for the message.
+    grams : tuple of str, optional
+        Names of the arrays that are sums of outer products (`is_gram`).
 
     Returns
     -------
@@ -198,13 +254,18 @@ def read_sums(state: dict[str, object], arrays: dict[str, tuple[int, ...]],
     Raises
     ------
     ValueError
-        A missing entry, a wrong shape, a non-finite or negative value.
+        A missing entry, a wrong shape, a non-finite or negative value, a sum of outer
+        products that is not symmetric positive semi-definite.
 
     """
     out = [np.asarray(state[name], dtype=float) for name in arrays]
     if any(x.shape != shape or not np.all(np.isfinite(x))
            for x, shape in zip(out, arrays.values(), strict=True)):
         raise ValueError(f'{what} sums of the wrong shape or not finite')
+    for name, x in zip(arrays, out, strict=True):
+        if name in grams and not is_gram(x):
+            raise ValueError(f'{what} {name}: not a sum of outer products (symmetric, '
+                             'positive semi-definite)')
     values = [float(state[name]) for name in scalars]  # type: ignore[arg-type]
     if not all(math.isfinite(x) and x >= 0.0 for x in values):
         raise ValueError(f'{what} sums negative or not finite')
@@ -332,10 +393,11 @@ class BaselineLearner:
         """
         (a, b), (c, weight, learnt, time_sum) = read_sums(
             state, {'a': (N_TERMS, N_TERMS), 'b': (N_TERMS,)},
-            ('c', 'weight', 'learnt_s', 'time_sum_s2'), 'baseline')
+            ('c', 'weight', 'learnt_s', 'time_sum_s2'), 'baseline', grams=('a',))
+        windows = read_count(state, 'windows', 'baseline')
         self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
         self.time_sum_s2 = time_sum
-        self.windows = int(state['windows'])  # type: ignore[call-overload]
+        self.windows = windows
         # the oil temperature's sums came later: a file without them knows no temperature
         temperature = (float(state.get('temperature_sum_c_s', 0.0)),  # type: ignore[arg-type]
                        float(state.get('temperature_time_s', 0.0)))  # type: ignore[arg-type]

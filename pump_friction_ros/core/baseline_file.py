@@ -367,9 +367,14 @@ def read_baseline(path: Path) -> dict[str, Any]:
         raise BaselineError(f'{path}: learnt.samples: expected a count, got {quote(samples)}')
     for key in ('first_stamp_ns', 'last_stamp_ns'):
         value = learnt.get(key)
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int)
+                                  or not 0 <= value < 2**63):
             raise BaselineError(f'{path}: learnt.{key}: expected a stamp [ns] or null, got '
                                 f'{quote(value)}')
+    first, last = learnt.get('first_stamp_ns'), learnt.get('last_stamp_ns')
+    if first is not None and last is not None and first > last:
+        raise BaselineError(f'{path}: learnt: first_stamp_ns {first} after last_stamp_ns '
+                            f'{last}')
     prov = doc['provenance']
     for key in ('pump', 'table', 'parameters'):
         if not isinstance(prov.get(key), dict):

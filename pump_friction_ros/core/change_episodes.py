@@ -231,7 +231,7 @@ class ChangeEpisodes:
         try:
             (g, b, g1, g2, b1), (c, count, seen, switches) = read_sums(
                 state, {'g': (n, n), 'b': (n,), 'g1': (n,), 'g2': (n,), 'b1': (n,)},
-                ('c', 'count', 'seen', 'switches'), 'isolation episodes')
+                ('c', 'count', 'seen', 'switches'), 'isolation episodes', grams=('g',))
             windows, last = state['windows'], state['last']
         except KeyError as missing:
             raise ValueError(f'isolation episodes: no {missing}') from None

@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-from .baseline import BaselineLearner
+from .baseline import BaselineLearner, read_count
 
 __all__ = ['DRIFT_NOISE_SIGMAS', 'Commissioning']
 
@@ -228,9 +228,9 @@ class Commissioning:
         """
         for name in ('learner', 'older', 'recent'):
             getattr(self, name).load(state[name])
-        self.restarts = int(state['restarts'])  # type: ignore[call-overload]
+        self.restarts = read_count(state, 'restarts', 'commissioning')
         self.drift_nm = float(state['drift_nm'])  # type: ignore[arg-type]
         # (came later: a state without them has seen no turn)
         self.direction = float(state.get('direction', 0.0))  # type: ignore[arg-type]
-        self.reversals = int(state.get('reversals', 0))  # type: ignore[call-overload]
+        self.reversals = read_count({'reversals': 0, **state}, 'reversals', 'commissioning')
         self.fit = self.learner.fit()

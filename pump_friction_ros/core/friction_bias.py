@@ -238,7 +238,8 @@ class FrictionBias:
         try:
             sums, _ = read_sums(state, {'g_before': square, 'b_before': vector, 'g0': square,
                                         'g1': square, 'g2': square, 'b0': vector,
-                                        'b1': vector}, (), 'friction bias')
+                                        'b1': vector}, (), 'friction bias',
+                                grams=('g_before', 'g0', 'g1', 'g2'))
         except (KeyError, TypeError) as exc:
             raise ValueError(f'friction bias sums: {exc!r}') from None
         (self.g_before, self.b_before, self.g0, self.g1, self.g2, self.b0, self.b1) = sums

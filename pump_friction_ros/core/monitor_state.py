@@ -33,7 +33,7 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 
 from .attribution import CAUSES
-from .baseline import read_sums
+from .baseline import read_count, read_sums
 from .oil_follow import followed
 
 if TYPE_CHECKING:
@@ -197,8 +197,11 @@ class MonitorPersistence:
     def _load(self, state: dict[str, object]) -> None:
         self.commissioning.load(state['commissioning'])  # type: ignore[arg-type]
         self.isolation.load(state['isolation'])  # type: ignore[arg-type]
-        self.samples = int(state['samples'])  # type: ignore[call-overload]
-        self.windows = int(state['windows'])  # type: ignore[call-overload]
+        self.samples = read_count(state, 'samples', 'monitor')
+        self.windows = read_count(state, 'windows', 'monitor')
+        complete = state['baseline_complete']
+        if not isinstance(complete, bool):
+            raise ValueError(f'baseline_complete {complete!r}: not true or false')
         self.baseline = self.fit if state['baseline_complete'] else None
         if self._follow is not None:  # came later: a file without it has followed nothing
             self._follow.reset()
@@ -223,6 +226,8 @@ class MonitorPersistence:
                 np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
                 and math.isfinite(ewma) and math.isfinite(var)):
             raise ValueError('monitor sums of the wrong shape or not finite')
+        if var < 0.0 or np.any(pos < 0.0) or np.any(neg < 0.0):
+            raise ValueError('monitor variance or CUSUM sums negative')
         # the oil allowance's sums came later: a file without them starts them afresh
         allowance = [float(state.get(key, 0.0))  # type: ignore[arg-type]
                      for key in ('allowance_nm_s', 'gain_allowance_nm_s', 'allowance_s')]

@@ -40,6 +40,7 @@ from rclpy.exceptions import (
     ParameterException,
 )
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 import rclpy.logging
 from rclpy.node import Node
 from rclpy.qos import (
@@ -81,6 +82,8 @@ from ..messages.conversions import (
     outputs_of,
     RELIABLE_INPUT_QOS_DEPTH,
 )
+
+_RCLError = _rclpy.RCLError  # what rcl raises: rclpy.init on a bad command line
 
 _MESSAGE_CLASSES = {JOINT_STATE: JointState, FLOAT64: Float64, FLUID_PRESSURE: FluidPressure,
                     TEMPERATURE: Temperature}
@@ -314,7 +317,11 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
     if stop.received:  # while Python imported rclpy and the messages: nothing to undo
         print(f'{NODE_NAME}: stopping on {stop.received[0]} during start-up', file=sys.stderr)
         return 0
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except _RCLError as exc:  # the command line: a params file that does not parse, a bad remap
+        print(f'{NODE_NAME}: cannot start: {" ".join(str(exc).split())}', file=sys.stderr)
+        return 1
     # Made before the node: an executor made after a signal has shut the context down
     # fails in its constructor (and then in its __del__, with a traceback on stderr).
     executor = SingleThreadedExecutor()
