@@ -236,6 +236,26 @@ def test_defective_joint_states_among_good_ones_are_counted_like_the_node(env, t
     assert estimates_of(proc.stdout) == 2000 - 150  # a NaN effort still has its speed
 
 
+def test_a_fleet_and_learn_baseline_say_what_each_bag_skipped(env, tmp_path):
+    def nan_speed(k, fields):
+        if k % 10 == 5:
+            fields.update(velocity=[float('nan')])
+        return fields
+
+    write_bag(tmp_path / 'fleet' / 'clean')
+    write_bag(tmp_path / 'fleet' / 'nans', joint=nan_speed)
+    proc = cli(env, 'replay', tmp_path / 'fleet', '--workers', '2', '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    lines = {line.split(':')[0]: line for line in proc.stdout.splitlines()
+             if ' estimates, ' in line}
+    assert 'skipped' not in lines['clean']
+    assert lines['nans'].endswith(', skipped: rejected_non_finite 200'), lines['nans']
+    proc = cli(env, 'learn-baseline', tmp_path / 'fleet' / 'nans', '--out', tmp_path / 'b.yaml',
+               '--quiet')
+    assert proc.returncode == 0, proc.stderr
+    assert ' monitored samples, skipped: rejected_non_finite 200' in proc.stdout, proc.stdout
+
+
 def test_input_topics_without_messages_are_refused_even_if_another_topic_has_some(env,
                                                                                   tmp_path):
     bag = write_bag(tmp_path / 'bag', n=0, extra=[('/chatter', 'std_msgs/msg/Float64', 300)])
@@ -543,7 +563,8 @@ def test_a_sigterm_that_lands_in_a_workers_finaliser_still_stops_it_and_leaves_n
                            str(tmp_path / 'fleet'), '--workers', '2', '--out', str(res / 'bags'),
                            '--csv', str(res / 'csv')],
                           capture_output=True, text=True, timeout=120, env=env, check=False)
-    assert (proc.returncode, proc.stderr) == (2, '')
+    assert (proc.returncode, proc.stderr) == (
+        2, 'pump_friction: error: 2 of 2 bags failed: one, two (why: above)\n')
     for name in ('one', 'two'):
         assert f'{name}: FAILED: the worker process died (exit code 143)' in proc.stdout
     assert not res.exists(), listing(res)

@@ -100,6 +100,15 @@ def test_unreachable_scheduler_is_a_bag_error_caused_by_the_os_error(monkeypatch
     assert isinstance(info.value.__cause__, OSError)
 
 
+@pytest.mark.parametrize('address', ['::::', 'foo://bar:1'])
+def test_a_malformed_scheduler_address_is_one_line_naming_it(capsys, address):
+    pytest.importorskip('dask.distributed', reason='dask[distributed] missing')
+    code = main(['replay', str(REPO / 'bags' / 'eha_nominal'), '--dask', address])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count('\n') == 1
+    assert err.startswith(f'pump_friction: error: --dask {address}: not a scheduler address')
+
+
 def _die(conn, parent_end, *args):
     """Stand-in for the bag reader process: ends at once, sending nothing."""
     os._exit(3)

@@ -77,6 +77,9 @@ def test_yaml_1_1_exponent_without_sign_is_read_as_a_number(raw):
     ('bearing', 'mean_diameter_m', 1e-320, 'mean_diameter_m: must be >= 0.0001'),
     ('piston_friction', 'joint_sliding_frame', 'shaft', 'must be one of barrel, flange'),
     ('bearing', 'f0', -1, 'bearing.f0: must be > 0'),
+    # integers too large for a float: refused by range, not an OverflowError
+    ('piston', 'mass_kg', 10**400, 'piston.mass_kg: must be finite, got 1000'),
+    ('geometry', 'n_pistons', 10**400, 'geometry.n_pistons: must be <= 2\\*\\*53'),
 ])
 def test_invalid_field_is_refused_with_one_message_naming_it(raw, section, key, value, message):
     if value is None:

@@ -527,6 +527,18 @@ def test_cli_fleet_prints_one_line_per_bag_and_a_table(tmp_path, bags, capsys):
     assert out.count(' estimates, ') == 2  # one line per bag
 
 
+def test_cli_fleet_with_a_failing_bag_exits_2_with_one_error_line_naming_it(
+        tmp_path, bags, capsys):
+    fleet = tmp_path / 'fleet'
+    shutil.copytree(bags['nominal'], fleet / 'good')
+    shutil.copytree(bags['nominal'], fleet / 'broken')
+    next((fleet / 'broken').glob('*.db3*')).write_bytes(b'not a database')
+    code = main(['replay', str(fleet), '--workers', '2', '--quiet'])
+    out, err = capsys.readouterr()
+    assert code == 2 and 'fleet: 2 bags (1 failed)' in out
+    assert err == 'pump_friction: error: 1 of 2 bags failed: broken (why: above)\n'
+
+
 def test_cli_single_bag_errors_exit_2_with_one_line(tmp_path, capsys):
     assert main(['replay', str(tmp_path / 'nothing')]) == 2
     err = capsys.readouterr().err

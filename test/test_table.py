@@ -198,6 +198,25 @@ def test_malformed_table_files_are_refused(tmp_path, paper_table, change, messag
         load_table(path)
 
 
+@pytest.mark.parametrize(('key', 'value'), [
+    ('zero_speed_threshold_rad_s', math.nan),  # the replay published NaN torques on it
+    ('displacement_m3', -1.0),  # and -1.9e6 N m on this
+    ('displacement_m3', 0.0),
+    ('displacement_m3', 'abc'),
+    ('default_viscosity_m2_s', None),
+    ('efficiency_min_pressure_pa', [1.0]),
+    ('efficiency_min_speed_rad_s', True),
+    ('efficiency_min_speed_rad_s', -0.5),
+])
+def test_table_metadata_numbers_out_of_their_range_are_refused_naming_them(
+        tmp_path, paper_table, key, value):
+    path = paper_table.save(tmp_path / 'table.npz')
+    metadata = {k: v for k, v in paper_table.metadata.items() if k != 'source'}
+    _rewrite(path, metadata=np.array(json.dumps({**metadata, key: value})))
+    with pytest.raises(TableError, match=f'metadata {key}: expected a finite number'):
+        load_table(path)
+
+
 def test_object_arrays_are_never_unpickled(tmp_path, paper_table):
     path = paper_table.save(tmp_path / 'table.npz')
     _rewrite(path, metadata=np.array([{'evil': 1}], dtype=object))

@@ -132,7 +132,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         alarm = ('; WARN or ERROR while learning: is this bag healthy?'
                  if summary.warn_intervals or summary.error_intervals else '')
         print(f'{bag}: {summary.duration_s:.1f} s, {summary.counts.get("monitor_samples", 0)} '
-              f'monitored samples{alarm}')
+              f'monitored samples{summary.skipped()}{alarm}')
         status = core.monitor.baseline_status()
     for note in notes:
         print(note)

@@ -82,10 +82,15 @@ def cmd_replay(args: argparse.Namespace) -> int:
                  else 'no alarm')
         print(f'{summary.label}: {summary.duration_s:.1f} s, {summary.estimates} estimates, '
               f'{alarm}, valve-plate scale {summary.final_valve_plate_scale:.3f} at the end'
-              + ''.join(f', {kind} {path}' for kind, path in summary.outputs.items()))
+              + ''.join(f', {kind} {path}' for kind, path in summary.outputs.items())
+              + summary.skipped())
     print()
     print(fleet_table(summaries))
-    return 2 if any(s.error for s in summaries) else 0
+    failed = [s.label for s in summaries if s.error]
+    if failed:  # the table says why: the error line says that it did
+        raise PumpFrictionError(f'{len(failed)} of {len(summaries)} bags failed: '
+                                f'{", ".join(failed)} (why: above)')
+    return 0
 
 
 def bag_config(bag: Path, args: argparse.Namespace, config: EstimatorConfig,

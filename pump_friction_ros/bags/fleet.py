@@ -388,7 +388,14 @@ def _run_on_dask(jobs: list[ReplayJob], dask_address: str) -> list[ReplaySummary
         raise BagError('--dask needs dask.distributed: pip install '
                        '"pump_friction_ros[fleet]"') from exc
     try:
-        with Client(dask_address, timeout='20s') as client:
+        client = Client(dask_address, timeout='20s')
+    except ValueError as exc:  # '::::', 'foo://bar:1': not an address at all
+        raise BagError(f'--dask {dask_address}: not a scheduler address '
+                       f'({" ".join(str(exc).split())})') from exc
+    except OSError as exc:
+        raise BagError(f'cannot reach the Dask scheduler at {dask_address}: {exc}') from exc
+    try:
+        with client:
             futures = client.map(run_job, jobs, pure=False)
             try:
                 summaries: list[ReplaySummary] = client.gather(futures)

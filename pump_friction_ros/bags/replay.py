@@ -73,6 +73,10 @@ from ..staging import (
 __all__ = ['CSV_COLUMNS', 'ReplayBatch', 'ReplayEvent', 'ReplaySummary', 'bag_estimates',
            'replay_bag', 'replay_batches', 'replay_events']
 
+# the counters of inputs skipped, rejected or clamped (the others count what was made)
+_SKIP_COUNTERS = tuple(k for k in COUNTERS
+                       if k.startswith(('stale', 'rejected', 'clamped', 'stamp')))
+
 
 @dataclass
 class ReplaySummary:
@@ -111,6 +115,19 @@ class ReplaySummary:
         """Time spent at WARN or ERROR [s]."""
         return sum(b - a for a, b in self.warn_intervals + self.error_intervals)
 
+    def skipped(self) -> str:
+        """
+        Say which inputs were skipped or clamped, and how many: the non-zero counters.
+
+        Returns
+        -------
+        str
+            ``', skipped: stale_skips 3, rejected_non_finite 900'``, or '' if none.
+
+        """
+        counts = [(k, self.counts.get(k, 0)) for k in _SKIP_COUNTERS]
+        return ''.join(f', {k} {n}' for k, n in counts if n).replace(', ', ', skipped: ', 1)
+
     def formatted(self) -> str:
         """
         Multi-line summary for a person.
@@ -131,9 +148,8 @@ class ReplaySummary:
                  '  messages read: ' + ', '.join(f'{t} {n}'
                                                  for t, n in self.messages_read.items()),
                  f'  estimates: {self.estimates} ({self.published} published)',
-                 '  skipped: ' + ', '.join(
-                     f'{k} {self.counts.get(k, 0)}' for k in COUNTERS
-                     if k.startswith(('stale', 'rejected', 'clamped', 'stamp'))),
+                 '  skipped: ' + ', '.join(f'{k} {self.counts.get(k, 0)}'
+                                           for k in _SKIP_COUNTERS),
                  f'  WARN: {intervals(self.warn_intervals)}',
                  f'  ERROR: {intervals(self.error_intervals)}',
                  f'  first alarm at {self.alarm_onset_s:.1f} s' if self.warn_intervals

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, fields
 from enum import Enum
 import math
 from pathlib import Path
+import sys
 from typing import Any, TypeVar
 
 from ..errors import ConfigError, quote
@@ -383,18 +384,22 @@ def _check(spec: ParameterSpec, value: Any, where: str) -> Any:
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ConfigError(f'{name}: expected a number, got {quote(value)}')
+    given = value
     if kind is int:
         if isinstance(value, float) and not value.is_integer():
             raise ConfigError(f'{name}: expected an integer, got {quote(value)}')
         value = int(value)
     else:
-        value = float(value)
+        if isinstance(value, int) and abs(value) > sys.float_info.max:
+            value = math.inf if value > 0 else -math.inf  # 400 digits: float() would raise
+        else:
+            value = float(value)
         if math.isnan(value):
             raise ConfigError(f'{name}: must not be NaN')
     low = -math.inf if spec.low is None else spec.low
     high = math.inf if spec.high is None else spec.high
     if not low <= value <= high:
-        raise ConfigError(f'{name}: must be in [{low:g}, {high:g}], got {quote(value)}')
+        raise ConfigError(f'{name}: must be in [{low:g}, {high:g}], got {quote(given)}')
     return value
 
 

@@ -32,6 +32,7 @@ from itertools import pairwise
 import json
 import math
 from pathlib import Path
+import sys
 from typing import Any, get_type_hints, overload
 
 import numpy as np
@@ -294,6 +295,9 @@ class PumpParams:
 # ---------------------------------------------------------------------------------------
 
 
+_MAX_EXACT_INT = 2**53  # the largest integer float arithmetic holds exactly
+
+
 def _as_number(value: Any) -> float | None:
     """
     Return ``value`` as a float, or None if it is not a number.
@@ -303,6 +307,8 @@ def _as_number(value: Any) -> float | None:
     """
     if isinstance(value, bool):
         return None
+    if isinstance(value, int) and abs(value) > sys.float_info.max:
+        return math.inf if value > 0 else -math.inf  # a 400-digit integer: not finite
     if isinstance(value, (int, float)):
         return float(value)
     if isinstance(value, str):
@@ -345,7 +351,7 @@ class _Section:
         if value is None:
             raise self._error(key, f'expected a number, got {quote(self._mapping[key])}')
         if not math.isfinite(value):
-            raise self._error(key, f'must be finite, got {value}')
+            raise self._error(key, f'must be finite, got {quote(self._mapping[key])}')
         if low is not None and (value < low or (value == low and not low_inclusive)):
             relation = '>=' if low_inclusive else '>'
             raise self._error(key, f'must be {relation} {low:g}, got {value:g}')
@@ -359,6 +365,8 @@ class _Section:
             raise self._error(key, f'expected an integer, got {quote(value)}')
         if value < low:
             raise self._error(key, f'must be >= {low}, got {quote(value)}')
+        if value > _MAX_EXACT_INT:  # beyond, float arithmetic on it is not exact (or fails)
+            raise self._error(key, f'must be <= 2**53, got {quote(value)}')
         return value
 
     def text(self, key: str, choices: tuple[str, ...] | None = None) -> str:

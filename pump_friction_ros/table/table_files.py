@@ -19,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Callable
 import hashlib
 import json
+import math
 import os
 from pathlib import Path
 
@@ -39,6 +40,11 @@ from ..physics.pump_parameters import PumpParams
 from ..physics.units import m2_s_to_cst
 
 __all__ = ['cache_dir', 'cached_table', 'cached_table_path', 'load_table']
+
+# the metadata's numbers: must they be > 0 (True) or >= 0 (False)?
+_NUMBERS = {'displacement_m3': True, 'zero_speed_threshold_rad_s': False,
+            'efficiency_min_speed_rad_s': False, 'efficiency_min_pressure_pa': False,
+            'default_viscosity_m2_s': True}
 
 
 def load_table(path: str | Path, params: PumpParams | None = None) -> FrictionTable:
@@ -89,12 +95,16 @@ def load_table(path: str | Path, params: PumpParams | None = None) -> FrictionTa
     if not isinstance(metadata, dict) or metadata.get('format') != TABLE_FORMAT \
             or metadata.get('components') != list(COMPONENTS):
         raise TableError(f'{path}: unsupported table format or components')
-    needed = ('pump_sha256', 'model_version', 'displacement_m3', 'zero_speed_threshold_rad_s',
-              'efficiency_min_speed_rad_s', 'efficiency_min_pressure_pa',
-              'default_viscosity_m2_s')
+    needed = ('pump_sha256', 'model_version', *_NUMBERS)
     absent = [k for k in needed if k not in metadata]
     if absent:
         raise TableError(f'{path}: metadata lacks {", ".join(absent)}')
+    for key, positive in _NUMBERS.items():
+        value = metadata[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not (
+                math.isfinite(value) and (value > 0.0 if positive else value >= 0.0)):
+            raise TableError(f'{path}: metadata {key}: expected a finite number '
+                             f'{"> 0" if positive else ">= 0"}, got {value!r}')
     _validate_arrays(arrays['speed_axis_rad_s'], arrays['pressure_axis_pa'],
                      arrays['viscosity_axis_m2_s'], arrays['torque_nm'], str(path))
     metadata['source'] = str(path)
