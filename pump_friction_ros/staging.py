@@ -40,7 +40,7 @@ from .errors import OutputError
 
 __all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
            'looks_like_plots', 'raise_if_interrupted', 'remove_empty_folders', 'sigint_held',
-           'sigint_ignored', 'sigint_kept', 'sigterm_kept']
+           'sigint_ignored', 'sigint_kept', 'sigterm_kept', 'stop_signal']
 
 _SIGINT_SEEN: list[int] = []  # Ctrl-Cs received through `sigint_kept`'s handler
 
@@ -62,13 +62,30 @@ def sigint_kept() -> None:
     KeyboardInterrupt that a finaliser swallowed is not printed, and `raise_if_interrupted`
     raises it again where the command checks: between batches and before any output is
     committed (`commit_all`). A handler not Python's default (Ctrl-C ignored by a runner in
-    the background, say) is left alone.
+    the background, say) is left alone. SIGTERM (``kill``, a supervisor stopping the
+    command), whose default would kill the process with its staged outputs left behind, is
+    taken the same way: a stop that discards them (`stop_signal` says which came).
     """
     _SIGINT_SEEN.clear()
-    if threading.current_thread() is threading.main_thread() \
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-        signal.signal(signal.SIGINT, _note_and_raise)
+    if threading.current_thread() is threading.main_thread():
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, _note_and_raise)
+        if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, _note_and_raise)
     _quiet_swallowed_stops()
+
+
+def stop_signal() -> int | None:
+    """
+    Return the first stop signal `sigint_kept`'s handlers received (SIGINT, SIGTERM), if any.
+
+    Returns
+    -------
+    int or None
+        The signal number, or None (no signal noted: a KeyboardInterrupt of another origin).
+
+    """
+    return _SIGINT_SEEN[0] if _SIGINT_SEEN else None
 
 
 def _note_and_exit(signum: int, frame: object) -> None:
@@ -160,14 +177,17 @@ def sigint_ignored() -> None:
     A second Ctrl-C (an impatient user, or one noted during the clean-up and handed on)
     may be pending when the first is caught: Python raises it at the next bytecode, in
     the report or on the way out of ``main``, and the process dies of SIGINT instead of
-    exiting 130. Setting the handler runs a pending one first: that only retries.
+    exiting 130. Setting the handler runs a pending one first: that only retries. A SIGTERM
+    taken by `sigint_kept` is ignored likewise.
     """
-    while True:
-        try:
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-            return
-        except KeyboardInterrupt:
-            continue
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        while True:
+            try:
+                if signum == signal.SIGINT or signal.getsignal(signum) is _note_and_raise:
+                    signal.signal(signum, signal.SIG_IGN)
+                break
+            except KeyboardInterrupt:
+                continue
 
 
 def looks_like_bag(path: Path) -> bool:

@@ -409,10 +409,12 @@ def test_dask_workers_in_another_directory_find_relative_paths(env, tmp_path, sm
 # -- Ctrl-C: one line, exit code 130, nothing left -----------------------------------------
 
 
-def interrupt(env, argv, watch, group=True, cwd=None):
+def interrupt(env, argv, watch, group=True, cwd=None, signum=None):
     """Start the CLI, wait until it stages an output under ``watch``, then Ctrl-C it."""
     import signal
     import time
+
+    signum = signal.SIGINT if signum is None else signum
 
     def as_in_a_terminal():  # a runner in the background starts us with Ctrl-C ignored
         signal.signal(signal.SIGINT, signal.SIG_DFL)
@@ -429,9 +431,9 @@ def interrupt(env, argv, watch, group=True, cwd=None):
             assert time.monotonic() < end, 'no staged output appeared'
             time.sleep(0.005)
         if group:  # a terminal's Ctrl-C reaches the whole foreground process group
-            os.killpg(proc.pid, signal.SIGINT)
+            os.killpg(proc.pid, signum)
         else:  # kill -INT <pid>: the command itself must stop its helpers
-            proc.send_signal(signal.SIGINT)
+            proc.send_signal(signum)
         out, err = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:
@@ -457,6 +459,22 @@ def test_ctrl_c_during_a_replay_leaves_nothing(env, tmp_path, long_bag):
     assert (code, err) == (130, 'pump_friction: interrupted\n')
     assert 'Traceback' not in out
     assert not res.exists()  # no output, no staging folder, no folder made for them
+
+
+@pytest.mark.parametrize('group', [False, True], ids=['kill', 'killpg'])
+def test_sigterm_during_a_replay_or_a_fleet_leaves_nothing_and_says_terminated(
+        env, tmp_path, long_bag, group):
+    import shutil
+    import signal
+    for name in ('one', 'two'):
+        shutil.copytree(long_bag, tmp_path / 'fleet' / name)
+    for bags, res in (([long_bag], tmp_path / 'res1'), ([tmp_path / 'fleet'], tmp_path / 'res2')):
+        code, out, err = interrupt(env, ['replay', *bags, '--workers', '2', '--out', res / 'bag',
+                                         '--csv', res / 'csv', '--plots', res / 'plots'],
+                                   tmp_path, group=group, signum=signal.SIGTERM)
+        assert (code, err) == (143, 'pump_friction: terminated\n'), out
+        assert not res.exists(), listing(res)  # no output, no staging folder
+        assert not any('.partial' in p.name for p in tmp_path.rglob('*')), listing(tmp_path)
 
 
 SECOND_CTRL_C = '''

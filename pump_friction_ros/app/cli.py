@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import json
 import math
 import os
+import signal
 import sys
 from typing import TYPE_CHECKING
 
@@ -40,7 +41,7 @@ from ..physics.units import (
     MM_TO_M,
     rpm_to_rad_s,
 )
-from ..staging import raise_if_interrupted, sigint_ignored, sigint_kept
+from ..staging import raise_if_interrupted, sigint_ignored, sigint_kept, stop_signal
 
 if TYPE_CHECKING:
     from ..table.friction_table import FrictionTable
@@ -431,7 +432,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C.
+        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C, 143 on SIGTERM.
 
     """
     sigint_kept()
@@ -453,8 +454,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _interrupted() -> int:
-    """Report a Ctrl-C in one line and return exit code 130 (`staging.sigint_ignored`)."""
+    """Report a Ctrl-C (130) or a SIGTERM (143) in one line (`staging.sigint_ignored`)."""
     sigint_ignored()  # a Ctrl-C still pending must not kill us while we report the first
+    if stop_signal() == signal.SIGTERM:
+        print('pump_friction: terminated', file=sys.stderr)
+        return 128 + signal.SIGTERM
     print('pump_friction: interrupted', file=sys.stderr)
     return 130
 
