@@ -432,7 +432,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C, 143 on SIGTERM.
+        Exit code: 0 on success, 2 on a bad argument, input or output, 130 on Ctrl-C, 143
+        on SIGTERM.
 
     """
     sigint_kept()
