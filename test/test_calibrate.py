@@ -165,6 +165,11 @@ def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_pat
     ('speed_rpm,pressure_bar,torque_nm\n5,100,8\n6,150,12\n', 'no usable samples'),
     ('speed_rpm,pressure_bar,torque_nm\n1000,100,8\n2000,150,12\n', 'too few'),
     ('speed_rpm,pressure_bar,torque_nm\n', 'no data rows'),
+    ('speed_rpm,pressure_bar,torque_nm,viscosity_cst\n1000,100,8,1e9\n',
+     'viscosity_cst up to 1e\\+09: above 10000 cSt'),
+    # a logger stuck on one reading: 50 samples, 1 point; it "fitted" every scale +-1e-16
+    ('speed_rpm,pressure_bar,torque_nm\n' + '1000,100,8.5\n' * 50,
+     '1 distinct usable samples \\(49 repeat others exactly\\) are too few'),
 ])
 def test_bad_input_is_refused_and_writes_nothing(tmp_path, content, message):
     data = tmp_path / 'bad.csv'
@@ -205,3 +210,43 @@ def test_correlation_time_is_one_for_white_noise_and_grows_with_smoothing():
     assert correlation_time(white) == pytest.approx(1.0, abs=0.1)
     smooth = np.convolve(white, np.ones(10) / 10, mode='same')  # 10-sample moving average
     assert correlation_time(smooth) == pytest.approx(10.0, rel=0.2)
+
+
+def test_a_parameter_whose_column_the_others_make_is_unidentifiable_however_small_the_noise():
+    """Two free parameters, one column twice the other: no data can split them."""
+    from pump_friction_ros.calibration.fit import fit_identifiable, NAMES
+    rng = np.random.default_rng(7)
+    n, k = 40, len(NAMES)
+    x = np.zeros((n, k))
+    x[:, 0] = rng.uniform(0.5, 2.0, n)
+    x[:, 1] = 2.0 * x[:, 0]  # collinear: any theta_0 + 2 theta_1 fits
+    y = x[:, 0] * 1.3 + 1e-9 * rng.standard_normal(n)  # all but noise-free
+    free = np.zeros(k, dtype=bool)
+    free[:2] = True
+    fit = fit_identifiable(x, y, np.ones(k), free, np.full(k, 10.0))
+    assert list(fit.unidentifiable) in ([NAMES[0]], [NAMES[1]])
+    assert 'combination of the others' in next(iter(fit.unidentifiable.values()))
+    kept = 0 if NAMES[1] in fit.unidentifiable else 1  # the other, fitted given it
+    assert fit.free.sum() == 1 and fit.free[kept]
+    expected = 1.3 - 2.0 if kept == 0 else (1.3 - 1.0) / 2.0
+    assert fit.theta[kept] == pytest.approx(max(expected, 0.0), abs=1e-6)
+
+
+def test_a_fit_beyond_a_pump_files_range_names_the_fitted_pump_not_a_staging_path(
+        tmp_path, monkeypatch):
+    from pump_friction_ros.calibration import report
+    from pump_friction_ros.errors import ConfigError
+
+    def beyond(path):  # the written file only: the base pump loads as it is
+        if Path(path) == Path(BASE):
+            return load_pump(path)
+        raise ConfigError(f'{path}: valve_plate.film_clearance_m: must be <= 0.001, got 1072.7')
+
+    data = write_bench(tmp_path / 'b.csv', load_pump(BASE), [1000, 2000, 3000, 4000],
+                       [50, 100, 150, 200, 250])
+    monkeypatch.setattr(report, 'load_pump', beyond)
+    out = tmp_path / 'out.yaml'
+    with pytest.raises(CalibrationError) as info:
+        calibrate([data], BASE, out)
+    assert str(info.value).startswith('the fitted pump: valve_plate.film_clearance_m')
+    assert 'partial' not in str(info.value) and not list(tmp_path.glob('*out.yaml*'))

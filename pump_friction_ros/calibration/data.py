@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from ..core.inputs import TEMPERATURE_RANGE_C
-from ..core.node_parameters import EstimatorConfig
+from ..core.node_parameters import EstimatorConfig, PARAMETERS
 from ..errors import CalibrationError, quote
 from ..physics.oil import WaltherViscosity
 from ..physics.units import BAR_TO_PA, cst_to_m2_s, RPM_TO_RAD_S
@@ -43,6 +43,9 @@ MIN_SPEED_RAD_S = 10.0  # below: stick-slip, the paper's model does not claim to
 BAG_COLUMNS = ('speed_rad_s', 'pressure_diff_pa', 'viscosity_m2_s', 'measured_nm',
                'accel_rad_s2', 'stamp_ns')
 """Estimate fields a bag contributes, one array each (see `bag_estimates`)."""
+
+# the node's range of oil_viscosity_m2_s: a bench oil beyond it is a unit mistake
+_VISCOSITY_SPEC = next(p for p in PARAMETERS if p.name == 'oil_viscosity_m2_s')
 
 
 @dataclasses.dataclass
@@ -193,6 +196,11 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
         if cst.min() < 0.5:
             raise CalibrationError(f'{path}: viscosity_cst down to {cst.min():g}: that looks '
                                    'like m^2/s, the column is in cSt')
+        most = (_VISCOSITY_SPEC.high or math.inf) / cst_to_m2_s(1.0)
+        if cst.max() > most:
+            raise CalibrationError(f'{path}: viscosity_cst up to {cst.max():g}: above '
+                                   f'{most:g} cSt, the most the node takes '
+                                   '(oil_viscosity_m2_s)')
         viscosity = cst_to_m2_s(cst)
     elif extra == ['temperature_c']:
         temp = column['temperature_c']

@@ -260,7 +260,10 @@ def fit_identifiable(x: np.ndarray, y: np.ndarray, theta0: np.ndarray, free: np.
     Fit, then fix the least identifiable parameter at its start value and refit, until all fit.
 
     A parameter is unidentifiable if its 95 % half-interval exceeds half its
-    ``reference`` (or its column is zero).
+    ``reference``, if its column is zero, or if its column is a combination of the other
+    free ones at the points given (the design's null space: there the covariance of a
+    least-squares fit says nothing; a stuck logger repeating one row fits any parameter
+    "exactly").
 
     Parameters
     ----------
@@ -291,13 +294,46 @@ def fit_identifiable(x: np.ndarray, y: np.ndarray, theta0: np.ndarray, free: np.
         ci[free] = 1.96 * np.sqrt(np.clip(np.diag(cov), 0.0, None)) if free.any() else []
         ratio = np.where(free, ci / (0.5 * refs), 0.0)
         ratio = np.where(free & column_zero, np.inf, ratio)
-        worst = int(np.argmax(ratio))
-        if not free.any() or ratio[worst] <= 1.0:
+        collinear = np.zeros(len(NAMES))
+        collinear[free] = _null_space_share(x[:, free] * refs[free])
+        if not free.any() or (ratio.max() <= 1.0 and not collinear.any()):
             return IdentifiedFit(theta, ci, free, noise, dropped)
+        if collinear.any() and not np.isinf(ratio).any():
+            worst = int(np.argmax(collinear))
+            why = "its effect is a combination of the others' at the points given"
+        else:
+            worst = int(np.argmax(ratio))
+            why = f'95 % interval +-{ci[worst]:.3g}'
         free[worst] = False
-        dropped[NAMES[worst]] = (f'{NAMES[worst]} cannot be identified from these data (95 % '
-                                 f'interval +-{ci[worst]:.3g}): kept at its base value '
-                                 f'{theta0[worst]:g}')
+        dropped[NAMES[worst]] = (f'{NAMES[worst]} cannot be identified from these data '
+                                 f'({why}): kept at its base value {theta0[worst]:g}')
+
+
+def _null_space_share(xs: np.ndarray) -> np.ndarray:
+    """
+    Return how much each column takes part in the design's null space (0: none).
+
+    Parameters
+    ----------
+    xs : ndarray
+        Design matrix (n, k), each column scaled by its parameter's reference.
+
+    Returns
+    -------
+    ndarray
+        Per column, the norm of its components in the right singular vectors whose singular
+        value is below 1e-9 of the largest (all of them if every one is zero) [-].
+
+    """
+    n, k = xs.shape
+    if n < k:  # zero rows: the directions n rows cannot reach get zero singular values
+        xs = np.vstack([xs, np.zeros((k - n, k))])
+    sv, vt = np.linalg.svd(xs, full_matrices=False)[1:]  # vt (k, k); U never made (n x k)
+    top = float(sv[0]) if sv.size else 0.0
+    rank = int(np.sum(sv > 1e-9 * top)) if top > 0.0 else 0
+    null = vt[rank:]  # (k - rank, k)
+    share = np.sqrt(np.sum(null ** 2, axis=0))
+    return np.where(share > 1e-6, share, 0.0)
 
 
 def cross_validate(x: np.ndarray, y: np.ndarray, theta0: np.ndarray, free: np.ndarray,

@@ -173,9 +173,14 @@ def _calibrate(inputs: list[str | Path], base_file: str | Path, pump_out: Staged
             free[k], status[p.name], theta0[k] = False, 'not applicable', 0.0
     if samples.is_bag:  # fitted below, from the whole record (state-variable filter)
         free[INERTIA] = False
-    if n < 2 * int(free.sum()) + 2:
-        raise CalibrationError(f'{n} usable samples are too few for {int(free.sum())} free '
-                               f'parameters (need at least {2 * int(free.sum()) + 2})')
+    # a row repeated exactly (a logger stuck on one reading) tells nothing new: count the
+    # distinct samples (regressors and torque together)
+    distinct = len(np.unique(np.column_stack([x, y]), axis=0))
+    if distinct < 2 * int(free.sum()) + 2:
+        repeated = f' ({n - distinct} repeat others exactly)' if distinct < n else ''
+        raise CalibrationError(f'{distinct} distinct usable samples{repeated} are too few for '
+                               f'{int(free.sum())} free parameters (need at least '
+                               f'{2 * int(free.sum()) + 2})')
     upper = upper_bounds(base)
     linear = fit_identifiable(x, y, theta0, free, upper)
     theta, ci, free = linear.theta, linear.ci95, linear.free

@@ -33,7 +33,7 @@ import numpy as np
 from .data import Samples
 from .fit import K_FOLDS
 from .. import __version__
-from ..errors import CalibrationError
+from ..errors import CalibrationError, ConfigError
 from ..physics.pump_parameters import load_pump, PumpParams
 from ..physics.units import pa_to_bar, rad_s_to_rpm
 
@@ -245,7 +245,10 @@ def write_pump_file(base_file: Path, out_file: Path, fitted: PumpParams,
             'drive_loss_torque_nm': by_name['drive_loss_torque_nm'].fitted}
     with open(out_file, 'w', encoding='utf-8') as handle:  # a staged path: moved at the end
         yaml.dump(data, handle)
-    check = load_pump(out_file)  # the file must load and mean the fitted pump
+    try:  # the file must load and mean the fitted pump
+        check = load_pump(out_file)
+    except ConfigError as exc:  # a fit beyond a pump file's ranges: not the staged path's
+        raise CalibrationError(str(exc).replace(str(out_file), 'the fitted pump')) from exc
     if check.sha256 != dataclasses.replace(fitted, source='').sha256:
         raise CalibrationError('internal: the written pump file differs from the fit')
 
