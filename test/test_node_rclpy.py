@@ -141,6 +141,31 @@ def test_published_inputs_come_back_as_the_cores_numbers(ros, paper_params):
         node.destroy_node()
 
 
+def test_with_simulated_time_before_the_first_clock_stamped_inputs_are_not_future(ros):
+    """use_sim_time and no /clock yet: the node's time reads 0, which judges no stamp."""
+    node = ros('use_sim_time:=true')
+    probe = Probe()
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    ex.add_node(probe)
+    try:
+        assert node.get_clock().now().nanoseconds == 0  # nobody publishes /clock here
+        assert spin_until(ex, lambda: probe.count_subscribers('joint_states') > 0)
+        assert spin_until(ex, lambda: probe.count_subscribers('load_pressure') > 0)
+        stamp = 10 * NS  # a bag's stamps, 10 s ahead of a clock at 0
+        for _ in range(50):
+            probe.send(stamp, 500.0, 12.0, 120e5)
+            stamp += 1_000_000
+            if spin_until(ex, lambda: 'residual' in probe.got, 0.2):
+                break
+        assert 'residual' in probe.got
+        assert node.core.counts['rejected_future_stamp'] == 0
+    finally:
+        ex.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:
@@ -190,6 +215,24 @@ def test_diagnostics_go_from_ok_to_alarm_on_a_simulated_wear_step(ros):
     finally:
         ex.shutdown()
         probe.destroy_node()
+        node.destroy_node()
+
+
+def test_every_ranged_parameter_is_described_with_its_range_and_read_only(ros):
+    """`ros2 param describe` shows the spec's range, [0, inf] included."""
+    from pump_friction_ros.core.node_parameters import PARAMETERS
+    node = ros()
+    try:
+        for spec in PARAMETERS:
+            desc = node.describe_parameter(spec.name)
+            assert desc.read_only and desc.description == spec.description, spec.name
+            if spec.low is None or isinstance(spec.default, (bool, str)):
+                continue
+            ranges = (desc.floating_point_range if isinstance(spec.default, float)
+                      else desc.integer_range)
+            assert len(ranges) == 1, spec.name
+            assert (ranges[0].from_value, ranges[0].to_value) == (spec.low, spec.high)
+    finally:
         node.destroy_node()
 
 

@@ -135,12 +135,12 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
     desc = ParameterDescriptor(description=spec.description, read_only=True)
     if spec.choices:
         desc.additional_constraints = 'one of: ' + ', '.join(spec.choices)
-    if spec.low is None or spec.high is None or not math.isfinite(spec.high):
+    if spec.low is None or spec.high is None:
         return desc
-    if isinstance(spec.default, int):  # (bool parameters have no range)
+    if isinstance(spec.default, int) and math.isfinite(spec.high):  # (bools: no range)
         desc.integer_range = [IntegerRange(from_value=int(spec.low), to_value=int(spec.high),
                                            step=1)]
-    elif isinstance(spec.default, float):
+    elif isinstance(spec.default, float):  # [0, inf] too: rclpy compares with inf
         desc.floating_point_range = [FloatingPointRange(from_value=float(spec.low),
                                                         to_value=float(spec.high), step=0.0)]
     return desc
@@ -250,8 +250,8 @@ class TorqueEstimatorNode(Node):
             if defect:
                 core.on_defect(defect)
                 return
-            now = now_ns()
-            self._publish(core.on_input(kind, stamp or now, value, torque, now))
+            now = now_ns()  # 0: simulated time before the first /clock, not a time to judge
+            self._publish(core.on_input(kind, stamp or now, value, torque, now or None))
 
         return on_message
 
