@@ -188,3 +188,16 @@ def test_each_sample_bag_carries_the_node_parameters_of_its_simulated_pump():
     for bag in ('eha_nominal', 'eha_valve_plate_wear'):
         assert (REPO / 'bags' / bag / 'node_params.yaml').read_text() == \
             SAMPLE_PARAMS.read_text()
+
+
+def test_a_bags_node_params_that_is_not_a_file_is_an_error_not_the_defaults(tmp_path, capsys):
+    """A folder where the bag's parameters belong: the replay must not run on defaults."""
+    import shutil
+    from pump_friction_ros.app.cli import main
+    bag = tmp_path / 'bag'
+    shutil.copytree(REPO / 'bags' / 'eha_nominal', bag)
+    (bag / 'node_params.yaml').unlink()
+    (bag / 'node_params.yaml').mkdir()
+    assert main(['replay', str(bag), '--quiet']) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and f'{bag / "node_params.yaml"}' in err

@@ -122,7 +122,7 @@ def bag_config(bag: Path, args: argparse.Namespace, config: EstimatorConfig,
     from ..core.node_parameters import BAG_PARAMS_FILE, load_estimator_config
 
     own = bag / BAG_PARAMS_FILE
-    if not own.is_file():
+    if not (own.exists() or own.is_symlink()):  # a folder or a dangling link: an error below
         return config
     given = f', then {", ".join(map(str, args.params))}' if args.params else ''
     notes.append(f'{bag}: node parameters from {own} (recorded with the bag){given}')
