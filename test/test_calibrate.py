@@ -214,7 +214,8 @@ def test_correlation_time_is_one_for_white_noise_and_grows_with_smoothing():
 
 def test_a_parameter_whose_column_the_others_make_is_unidentifiable_however_small_the_noise():
     """Two free parameters, one column twice the other: no data can split them."""
-    from pump_friction_ros.calibration.fit import fit_identifiable, NAMES
+    from pump_friction_ros.calibration.fit import NAMES
+    from pump_friction_ros.calibration.identifiability import fit_identifiable
     rng = np.random.default_rng(7)
     n, k = 40, len(NAMES)
     x = np.zeros((n, k))

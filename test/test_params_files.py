@@ -193,6 +193,7 @@ def test_each_sample_bag_carries_the_node_parameters_of_its_simulated_pump():
 def test_a_bags_node_params_that_is_not_a_file_is_an_error_not_the_defaults(tmp_path, capsys):
     """A folder where the bag's parameters belong: the replay must not run on defaults."""
     import shutil
+
     from pump_friction_ros.app.cli import main
     bag = tmp_path / 'bag'
     shutil.copytree(REPO / 'bags' / 'eha_nominal', bag)

@@ -31,7 +31,6 @@ import numpy as np
 from .data import load_bag_samples, load_bench_csv, merge_samples, MIN_SPEED_RAD_S
 from .fit import (
     cross_validate,
-    fit_identifiable,
     fit_inertia,
     FIT_PARAMETERS,
     fitted_pump,
@@ -42,6 +41,7 @@ from .fit import (
     rms,
     upper_bounds,
 )
+from .identifiability import fit_identifiable
 from .report import (
     CalibrationResult,
     ParameterReport,
