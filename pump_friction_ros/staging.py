@@ -35,6 +35,8 @@ import signal
 import sys
 import tempfile
 import threading
+from types import FrameType
+from typing import Any
 
 from .errors import OutputError
 
@@ -73,6 +75,19 @@ def sigint_kept() -> None:
         if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
             signal.signal(signal.SIGTERM, _note_and_raise)
     _quiet_swallowed_stops()
+
+
+def _default_sigterm_in_child() -> None:
+    """In a forked child, give SIGTERM back its default if it was `sigint_kept`'s."""
+    if signal.getsignal(signal.SIGTERM) is _note_and_raise:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+# A process forked by a command (a process pool's worker, a helper) must not inherit the
+# command's SIGTERM-as-Ctrl-C: its parent stops it with SIGTERM (a pool's terminate), and
+# a KeyboardInterrupt there is an error of one task, after which it would go on. Those that
+# stop on SIGTERM in their own way set their handler as they start (`sigterm_kept`).
+os.register_at_fork(after_in_child=_default_sigterm_in_child)
 
 
 def stop_signal() -> int | None:
@@ -150,24 +165,32 @@ def sigint_held() -> Iterator[None]:
     start and its own handler setup cannot raise KeyboardInterrupt in it), and in the main
     thread Python's handler is swapped for one that only notes the signal (another thread
     may receive it). A Ctrl-C noted meanwhile is handed to the previous handler at the end.
-    SIGTERM (the fleet's stop of a worker, `sigterm_kept`) is blocked too, and delivered as
-    the mask is restored: a worker stopped mid-commit exits once its output is in place, not
-    between the old one's removal and the new one's rename.
+    SIGTERM (the fleet's stop of a worker, `sigterm_kept`; the command's own, `sigint_kept`)
+    is blocked and noted likewise, and delivered at the end: a worker stopped mid-commit
+    exits once its output is in place, not between the old one's removal and the new one's
+    rename.
     """
     noted: list[int] = []
-    previous = signal.getsignal(signal.SIGINT)
-    in_main = threading.current_thread() is threading.main_thread() and previous is not None
-    if in_main:  # (None: a handler not set from Python, left alone)
-        signal.signal(signal.SIGINT, lambda signum, _: noted.append(signum))
+    swapped: dict[int, Callable[[int, FrameType | None], Any]] = {}
+    if threading.current_thread() is threading.main_thread():
+        for stop in (signal.SIGINT, signal.SIGTERM):
+            previous = signal.getsignal(stop)
+            # a handler set from Python (not SIG_DFL, SIG_IGN, or None: not from Python)
+            # runs in this thread whichever thread the signal reached (numpy's BLAS
+            # threads, which the mask below does not cover): it only notes the signal now
+            if callable(previous):
+                swapped[stop] = previous
+                signal.signal(stop, lambda signum, _: noted.append(signum))
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        if in_main:
-            signal.signal(signal.SIGINT, previous)
-            if noted and callable(previous):
-                previous(signal.SIGINT, None)  # e.g. raises KeyboardInterrupt now
+        for restored, handler in swapped.items():
+            signal.signal(restored, handler)
+        for came in dict.fromkeys(noted):  # once each, in the order they came
+            if came in swapped:
+                swapped[came](came, None)  # e.g. raises KeyboardInterrupt now
 
 
 def sigint_ignored() -> None:

@@ -167,6 +167,9 @@ def test_written_pump_file_has_provenance_rebuilds_its_table_and_replays(tmp_pat
     ('speed_rpm,pressure_bar,torque_nm\n', 'no data rows'),
     ('speed_rpm,pressure_bar,torque_nm,viscosity_cst\n1000,100,8,1e9\n',
      'viscosity_cst up to 1e\\+09: above 10000 cSt'),
+    # ISO VG 46 (the node's default oil law) at -40 degC: ~1e5 cSt, beyond the node's range
+    ('speed_rpm,pressure_bar,torque_nm,temperature_c\n1000,100,8,-40\n',
+     'temperature_c down to -40 degC: the oil is [0-9]+ cSt there, above the 10000 cSt'),
     # a logger stuck on one reading: 50 samples, 1 point; it "fitted" every scale +-1e-16
     ('speed_rpm,pressure_bar,torque_nm\n' + '1000,100,8.5\n' * 50,
      '1 distinct usable samples \\(49 repeat others exactly\\) are too few'),

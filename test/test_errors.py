@@ -100,7 +100,7 @@ def test_unreachable_scheduler_is_a_bag_error_caused_by_the_os_error(monkeypatch
     assert isinstance(info.value.__cause__, OSError)
 
 
-@pytest.mark.parametrize('address', ['::::', 'foo://bar:1'])
+@pytest.mark.parametrize('address', ['::::', 'foo://bar:1', 'tls://127.0.0.1:1'])
 def test_a_malformed_scheduler_address_is_one_line_naming_it(capsys, address):
     pytest.importorskip('dask.distributed', reason='dask[distributed] missing')
     code = main(['replay', str(REPO / 'bags' / 'eha_nominal'), '--dask', address])

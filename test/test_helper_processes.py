@@ -279,6 +279,35 @@ def test_a_sigterm_during_a_held_moment_is_delivered_after_it():
     assert run_bounded(sigterm_while_held) == ['still held', 'terminated', 'released']
 
 
+def sigterm_to_another_thread_while_held(conn):
+    import threading
+
+    from pump_friction_ros.staging import sigint_held, sigint_kept, stop_signal
+    sigint_kept()  # the command's SIGTERM: a Ctrl-C
+    events = []
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)  # started before the hold: it does not block
+    other.start()
+    try:
+        with sigint_held():
+            signal.pthread_kill(other.ident, signal.SIGTERM)  # a thread the mask misses
+            time.sleep(0.05)
+            events.append('still held')
+        events.append('released')
+    except KeyboardInterrupt:
+        events.append('interrupted')
+    stop.set()
+    other.join()
+    conn.send((events, stop_signal()))
+
+
+def test_a_sigterm_that_reaches_another_thread_during_a_held_moment_waits_for_its_end():
+    # numpy's BLAS threads are such threads: the signal's Python handler runs in the main
+    # thread whichever thread received it, and the mask covers the main thread only
+    events, came = run_bounded(sigterm_to_another_thread_while_held)
+    assert (events, came) == (['still held', 'interrupted'], signal.SIGTERM)
+
+
 def report_mask(conn):
     conn.send(sorted(signal.pthread_sigmask(signal.SIG_BLOCK, [])))
 

@@ -150,6 +150,7 @@ def test_a_refused_start_up_exits_1_with_one_line_naming_the_parameter(
     ['--params-file', '{tmp}/missing.yaml'],
     ['--params-file', '{tmp}/broken.yaml'],  # YAML that does not parse
     ['-r', '__ns:=not.a.namespace'],
+    ['--params-files', '{tmp}/missing.yaml'],  # a typo: rclpy's UnknownROSArgsError
 ])
 def test_a_command_line_rcl_refuses_exits_1_with_our_line_and_no_traceback(tmp_path, arguments):
     """rclpy.init fails (rcl logs its own line first): one line of ours, no traceback."""
@@ -164,4 +165,5 @@ def test_a_command_line_rcl_refuses_exits_1_with_our_line_and_no_traceback(tmp_p
     ours = [line for line in text.splitlines() if line.startswith('torque_estimator:')]
     assert proc.returncode == 1, text
     assert 'Traceback' not in text and len(ours) == 1, text
-    assert ours[0].startswith('torque_estimator: cannot start: failed to initialize rcl'), text
+    assert ours[0].startswith(('torque_estimator: cannot start: failed to initialize rcl',
+                               'torque_estimator: cannot start: unknown --ros-args')), text

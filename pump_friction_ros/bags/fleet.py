@@ -389,7 +389,7 @@ def _run_on_dask(jobs: list[ReplayJob], dask_address: str) -> list[ReplaySummary
                        '"pump_friction_ros[fleet]"') from exc
     try:
         client = Client(dask_address, timeout='20s')
-    except ValueError as exc:  # '::::', 'foo://bar:1': not an address at all
+    except (ValueError, TypeError) as exc:  # '::::', 'foo://bar:1'; tls:// without TLS set up
         raise BagError(f'--dask {dask_address}: not a scheduler address '
                        f'({" ".join(str(exc).split())})') from exc
     except OSError as exc:

@@ -33,7 +33,7 @@ from ..core.inputs import TEMPERATURE_RANGE_C
 from ..core.node_parameters import EstimatorConfig, PARAMETERS
 from ..errors import CalibrationError, quote
 from ..physics.oil import WaltherViscosity
-from ..physics.units import BAR_TO_PA, cst_to_m2_s, RPM_TO_RAD_S
+from ..physics.units import BAR_TO_PA, cst_to_m2_s, m2_s_to_cst, RPM_TO_RAD_S
 from ..table.friction_table import FrictionTable
 
 __all__ = ['BAG_COLUMNS', 'MIN_SPEED_RAD_S', 'Samples', 'bag_estimates', 'load_bag_samples',
@@ -209,6 +209,12 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
             raise CalibrationError(f'{path}: temperature_c outside {low:g}..{high:g} degC '
                                    '(kelvin?)')
         viscosity = np.array([oil(t) for t in temp])
+        most = _VISCOSITY_SPEC.high or math.inf
+        if viscosity.max() > most:
+            raise CalibrationError(f'{path}: temperature_c down to {temp.min():g} degC: the '
+                                   f'oil is {m2_s_to_cst(viscosity.max()):.0f} cSt there, above '
+                                   f'the {m2_s_to_cst(most):g} cSt the node takes '
+                                   '(oil_viscosity_m2_s)')
     n = len(rows)
     return Samples(speed=speed_rpm * RPM_TO_RAD_S, dp=bar * BAR_TO_PA, viscosity=viscosity,
                    torque=torque, accel=np.zeros(n), block=np.arange(n), is_bag=False,

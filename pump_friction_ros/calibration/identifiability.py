@@ -135,7 +135,9 @@ def _null_space_share(xs: np.ndarray) -> np.ndarray:
     n, k = xs.shape
     if n < k:  # zero rows: the directions n rows cannot reach get zero singular values
         xs = np.vstack([xs, np.zeros((k - n, k))])
-    sv, vt = np.linalg.svd(xs, full_matrices=False)[1:]  # vt (k, k); U never made (n x k)
+    # the triangular factor R (k x k) has the singular values and right vectors of xs, and
+    # its QR makes no n x k matrix (a bag's design has 1e5 rows)
+    sv, vt = np.linalg.svd(np.linalg.qr(xs, mode='r'))[1:]
     top = float(sv[0]) if sv.size else 0.0
     rank = int(np.sum(sv > 1e-9 * top)) if top > 0.0 else 0
     null = vt[rank:]  # (k - rank, k)

@@ -27,7 +27,6 @@ for any number of worker processes.
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 import math
 import os
@@ -48,6 +47,7 @@ from ..core.inputs import InputKind
 from ..core.monitor import OK
 from ..core.node_parameters import EstimatorConfig, load_estimator_config
 from ..paths import config_dir
+from ..process_pool import process_map
 
 __all__ = ['BankResult', 'MonitorReading', 'RunRecord', 'base_config', 'baseline_learnt',
            'build_scenarios', 'feed_signals', 'prepare_true_tables', 'read_monitor', 'run_bank',
@@ -457,11 +457,9 @@ def run_bank(settings: BankSettings, workers: int = 1, seed: int = 0,
             if progress:
                 progress(len(records), len(scenarios))
     else:
-        with ProcessPoolExecutor(max_workers=min(workers, len(scenarios))) as pool:
-            for record in pool.map(run_scenario, scenarios):
-                records.append(record)
-                if progress:
-                    progress(len(records), len(scenarios))
+        records = process_map(run_scenario, scenarios, min(workers, len(scenarios)),
+                              (lambda done: progress(done, len(scenarios))) if progress
+                              else None)
     return BankResult(settings, seed, workers, records, time.perf_counter() - start,
                       _cpu_s() - cpu_start)
 

@@ -27,7 +27,6 @@ with the node's ``warm_up_pause_s`` (``core.warm_up_hold``) and once with the ho
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 import math
 
@@ -36,6 +35,7 @@ from .bank_node import scenario_node, simulated
 from .scenarios import Scenario, SimulatedScenario
 from .settings import BankSettings
 from ..core.monitor import LEVEL_NAMES
+from ..process_pool import process_map
 
 __all__ = ['DAY_S', 'NextMorning', 'format_next_mornings', 'next_morning_scenarios',
            'run_next_morning', 'run_next_mornings']
@@ -143,8 +143,7 @@ def run_next_mornings(settings: BankSettings, seeds: list[int], workers: int = 1
     prepare_true_tables(scenarios)  # (the pump's and the node's tables too)
     if workers == 1:
         return [run_next_morning(s) for s in scenarios]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        return list(pool.map(run_next_morning, scenarios))
+    return process_map(run_next_morning, scenarios, workers)
 
 
 def format_next_mornings(records: list[NextMorning], seeds: list[int]) -> str:

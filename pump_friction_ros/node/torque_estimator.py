@@ -83,7 +83,8 @@ from ..messages.conversions import (
     RELIABLE_INPUT_QOS_DEPTH,
 )
 
-_RCLError = _rclpy.RCLError  # what rcl raises: rclpy.init on a bad command line
+# what rclpy.init raises on a bad command line (the second: a RuntimeError, not the first)
+_RCLError, _UnknownROSArgsError = _rclpy.RCLError, _rclpy.UnknownROSArgsError
 
 _MESSAGE_CLASSES = {JOINT_STATE: JointState, FLOAT64: Float64, FLUID_PRESSURE: FluidPressure,
                     TEMPERATURE: Temperature}
@@ -319,8 +320,12 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
         return 0
     try:
         rclpy.init(args=args)
-    except _RCLError as exc:  # the command line: a params file that does not parse, a bad remap
-        print(f'{NODE_NAME}: cannot start: {" ".join(str(exc).split())}', file=sys.stderr)
+    except (_RCLError, _UnknownROSArgsError) as exc:  # the command line: a params file that
+        # does not parse, a bad remap, an unknown --ros-args flag (--params-files)
+        why = ' '.join(str(exc).split())
+        if isinstance(exc, _UnknownROSArgsError):  # its text is the list of them
+            why = f'unknown --ros-args argument(s) {why}'
+        print(f'{NODE_NAME}: cannot start: {why}', file=sys.stderr)
         return 1
     # Made before the node: an executor made after a signal has shut the context down
     # fails in its constructor (and then in its __del__, with a traceback on stderr).
