@@ -15,17 +15,19 @@
 """
 Map a function over items in worker processes, stopping the workers when the caller stops.
 
-``ProcessPoolExecutor`` used as a context manager waits, on the way out of an exception
-(a Ctrl-C, a SIGTERM taken as one, a worker killed), for every item already handed to it:
-`pool.map` hands them all at once, so a stopped evaluation bank would run to its end. Here
-the workers are terminated instead, and they ignore Ctrl-C themselves (the terminal sends
-it to the whole process group: the parent alone decides how to stop).
+``concurrent.futures.ProcessPoolExecutor`` used as a context manager waits, on the way out
+of an exception (a Ctrl-C, a SIGTERM taken as one, a failed item), for every item already
+handed to it: its ``map`` hands them all out at once, so a stopped evaluation bank ran on
+to its end; and killing its workers races its own thread (CPython 3.11 then raises
+InvalidStateError there). ``multiprocessing.Pool`` used as a context manager terminates its
+workers on the way out instead. The workers ignore Ctrl-C (the terminal sends it to the
+whole process group: the parent alone decides how to stop) and take SIGTERM by default.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from concurrent.futures import ProcessPoolExecutor
+import multiprocessing
 import signal
 from typing import TypeVar
 
@@ -33,8 +35,6 @@ __all__ = ['process_map']
 
 _T = TypeVar('_T')
 _R = TypeVar('_R')
-
-_JOIN_S = 5.0  # how long a terminated worker is waited for before it is killed [s]
 
 
 def _worker_start() -> None:
@@ -71,28 +71,12 @@ def process_map(function: Callable[[_T], _R], items: Iterable[_T], workers: int,
         are terminated first, without waiting for the items not yet done.
 
     """
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_start)
     results: list[_R] = []
-    try:
-        for result in pool.map(function, items):
+    with multiprocessing.get_context().Pool(workers, initializer=_worker_start) as pool:
+        for result in pool.imap(function, items):  # (the exit terminates the workers)
             results.append(result)
             if on_result is not None:
                 on_result(len(results))
-    except BaseException:
-        _terminate(pool)
-        raise
-    pool.shutdown()
+        pool.close()
+        pool.join()  # waited for: their CPU time counts in os.times()'s children
     return results
-
-
-def _terminate(pool: ProcessPoolExecutor) -> None:
-    """Stop a pool's workers now, dropping what they were doing and what was queued."""
-    processes = list((getattr(pool, '_processes', None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        process.terminate()
-    for process in processes:
-        process.join(_JOIN_S)
-        if process.is_alive():
-            process.kill()
-            process.join(_JOIN_S)

@@ -45,18 +45,20 @@ def test_a_stop_of_the_caller_terminates_the_workers_and_leaves_the_queue_undone
     def stop(done):
         raise KeyboardInterrupt  # a Ctrl-C (or a SIGTERM taken as one) after the first result
 
+    before = set(multiprocessing.active_children())  # (an earlier test's helper may be exiting)
     with pytest.raises(KeyboardInterrupt):
         process_map(slow_mark, items, 2, stop)
-    assert not multiprocessing.active_children()  # terminated and joined, none left
+    assert set(multiprocessing.active_children()) <= before  # terminated and joined
     ran = len(list(tmp_path.glob('*.done')))
     time.sleep(0.6)  # two more items' time: nothing is still running to mark them
     assert len(list(tmp_path.glob('*.done'))) == ran < len(items)
 
 
 def test_a_failing_item_is_raised_and_the_workers_are_gone():
+    before = set(multiprocessing.active_children())
     with pytest.raises(ZeroDivisionError):
         process_map(_inverse, [1, 2, 0, 4], 2)
-    assert not multiprocessing.active_children()
+    assert set(multiprocessing.active_children()) <= before
 
 
 def _inverse(x):
