@@ -16,19 +16,44 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 import re
+import sys
 from typing import Any
 
 import yaml
 
 from .errors import ConfigError
 
-__all__ = ['SafeDumper', 'read_yaml']
+__all__ = ['SafeDumper', 'number_as_float', 'read_yaml']
 
 _EXPONENT_FLOAT = re.compile(r'^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$')
 """A plain number with an exponent and no dot (``1e-3``): a string to YAML 1.1, a double to
 ROS 2 (`_Loader`)."""
+
+
+def number_as_float(value: int | float) -> float:
+    """
+    Return a number read from a file as a float: an integer beyond float's range as +-inf.
+
+    YAML reads a 400-digit integer exactly, and ``float()`` of it raises OverflowError;
+    as +-inf it is refused by a range or finiteness check like any other number.
+
+    Parameters
+    ----------
+    value : int or float
+        The number.
+
+    Returns
+    -------
+    float
+        ``float(value)``, or +-inf where that would overflow.
+
+    """
+    if isinstance(value, int) and abs(value) > sys.float_info.max:
+        return math.inf if value > 0 else -math.inf
+    return float(value)
 
 
 class _Loader(yaml.SafeLoader):

@@ -125,8 +125,8 @@ class ReplaySummary:
             ``', skipped: stale_skips 3, rejected_non_finite 900'``, or '' if none.
 
         """
-        counts = [(k, self.counts.get(k, 0)) for k in _SKIP_COUNTERS]
-        return ''.join(f', {k} {n}' for k, n in counts if n).replace(', ', ', skipped: ', 1)
+        items = ', '.join(f'{k} {n}' for k in _SKIP_COUNTERS if (n := self.counts.get(k, 0)))
+        return f', skipped: {items}' if items else ''
 
     def formatted(self) -> str:
         """

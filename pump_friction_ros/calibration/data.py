@@ -44,8 +44,9 @@ BAG_COLUMNS = ('speed_rad_s', 'pressure_diff_pa', 'viscosity_m2_s', 'measured_nm
                'accel_rad_s2', 'stamp_ns')
 """Estimate fields a bag contributes, one array each (see `bag_estimates`)."""
 
-# the node's range of oil_viscosity_m2_s: a bench oil beyond it is a unit mistake
-_VISCOSITY_SPEC = next(p for p in PARAMETERS if p.name == 'oil_viscosity_m2_s')
+# the top of the node's range of oil_viscosity_m2_s: a bench oil beyond it is a mistake
+_MOST_VISCOSITY_M2_S = next(p.high for p in PARAMETERS
+                            if p.name == 'oil_viscosity_m2_s') or math.inf
 
 
 @dataclasses.dataclass
@@ -196,12 +197,11 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
         if cst.min() < 0.5:
             raise CalibrationError(f'{path}: viscosity_cst down to {cst.min():g}: that looks '
                                    'like m^2/s, the column is in cSt')
-        most = (_VISCOSITY_SPEC.high or math.inf) / cst_to_m2_s(1.0)
-        if cst.max() > most:
-            raise CalibrationError(f'{path}: viscosity_cst up to {cst.max():g}: above '
-                                   f'{most:g} cSt, the most the node takes '
-                                   '(oil_viscosity_m2_s)')
         viscosity = cst_to_m2_s(cst)
+        if viscosity.max() > _MOST_VISCOSITY_M2_S:
+            raise CalibrationError(f'{path}: viscosity_cst up to {cst.max():g}: above '
+                                   f'{m2_s_to_cst(_MOST_VISCOSITY_M2_S):g} cSt, the most '
+                                   'the node takes (oil_viscosity_m2_s)')
     elif extra == ['temperature_c']:
         temp = column['temperature_c']
         low, high = TEMPERATURE_RANGE_C  # the estimator's plausible oil temperatures
@@ -209,12 +209,11 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
             raise CalibrationError(f'{path}: temperature_c outside {low:g}..{high:g} degC '
                                    '(kelvin?)')
         viscosity = np.array([oil(t) for t in temp])
-        most = _VISCOSITY_SPEC.high or math.inf
-        if viscosity.max() > most:
+        if viscosity.max() > _MOST_VISCOSITY_M2_S:
             raise CalibrationError(f'{path}: temperature_c down to {temp.min():g} degC: the '
                                    f'oil is {m2_s_to_cst(viscosity.max()):.0f} cSt there, above '
-                                   f'the {m2_s_to_cst(most):g} cSt the node takes '
-                                   '(oil_viscosity_m2_s)')
+                                   f'the {m2_s_to_cst(_MOST_VISCOSITY_M2_S):g} cSt the node '
+                                   'takes (oil_viscosity_m2_s)')
     n = len(rows)
     return Samples(speed=speed_rpm * RPM_TO_RAD_S, dp=bar * BAR_TO_PA, viscosity=viscosity,
                    torque=torque, accel=np.zeros(n), block=np.arange(n), is_bag=False,

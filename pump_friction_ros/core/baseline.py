@@ -192,7 +192,7 @@ def is_gram(x: np.ndarray) -> bool:
 
     """
     scale = float(np.max(np.abs(np.diag(x)), initial=0.0))
-    if not np.array_equal(x, x.T) and not np.allclose(x, x.T, rtol=0.0, atol=1e-9 * scale):
+    if not np.allclose(x, x.T, rtol=0.0, atol=1e-9 * scale):
         return False
     return x.size == 0 or float(np.linalg.eigvalsh(0.5 * (x + x.T))[0]) >= -1e-6 * scale
 

@@ -202,7 +202,7 @@ class MonitorPersistence:
         complete = state['baseline_complete']
         if not isinstance(complete, bool):
             raise ValueError(f'baseline_complete {complete!r}: not true or false')
-        self.baseline = self.fit if state['baseline_complete'] else None
+        self.baseline = self.fit if complete else None
         if self._follow is not None:  # came later: a file without it has followed nothing
             self._follow.reset()
             if self.baseline is not None and 'oil_follow' in state:

@@ -32,12 +32,11 @@ from dataclasses import dataclass, field, fields
 from enum import Enum
 import math
 from pathlib import Path
-import sys
 from typing import Any, TypeVar
 
 from ..errors import ConfigError, quote
 from ..paths import resolve_path
-from ..yaml_files import read_yaml
+from ..yaml_files import number_as_float, read_yaml
 
 _View = TypeVar('_View')
 
@@ -390,10 +389,7 @@ def _check(spec: ParameterSpec, value: Any, where: str) -> Any:
             raise ConfigError(f'{name}: expected an integer, got {quote(value)}')
         value = int(value)
     else:
-        if isinstance(value, int) and abs(value) > sys.float_info.max:
-            value = math.inf if value > 0 else -math.inf  # 400 digits: float() would raise
-        else:
-            value = float(value)
+        value = number_as_float(value)
         if math.isnan(value):
             raise ConfigError(f'{name}: must not be NaN')
     low = -math.inf if spec.low is None else spec.low

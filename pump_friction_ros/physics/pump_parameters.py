@@ -32,14 +32,13 @@ from itertools import pairwise
 import json
 import math
 from pathlib import Path
-import sys
 from typing import Any, get_type_hints, overload
 
 import numpy as np
 
 from ..errors import ConfigError, quote
 from ..paths import config_dir, default_pump_file, resolve_path
-from ..yaml_files import read_yaml
+from ..yaml_files import number_as_float, read_yaml
 
 __all__ = [
     'Bearing',
@@ -307,10 +306,8 @@ def _as_number(value: Any) -> float | None:
     """
     if isinstance(value, bool):
         return None
-    if isinstance(value, int) and abs(value) > sys.float_info.max:
-        return math.inf if value > 0 else -math.inf  # a 400-digit integer: not finite
     if isinstance(value, (int, float)):
-        return float(value)
+        return number_as_float(value)  # (a 400-digit integer: inf, refused as not finite)
     if isinstance(value, str):
         try:
             return float(value)
