@@ -72,6 +72,43 @@ _Loader.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
                               list('-+0123456789.'))
 
 
+class _UniqueKeys:
+    """
+    A loader mixin refusing a mapping that gives one key twice.
+
+    PyYAML keeps the last of the two silently: in a pump file, a second ``film_clearance_m``
+    pasted below the first changes the model with nothing said. Keys brought in by a merge
+    (``<<``) may still be overridden, as YAML means them to be.
+    """
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> Any:
+        """Construct the mapping after checking that no key is given twice."""
+        seen: set[Any] = set()
+        for key_node, _ in node.value:
+            if key_node.tag == 'tag:yaml.org,2002:merge':
+                continue
+            key = self.construct_object(key_node, deep=True)  # type: ignore[attr-defined]
+            try:
+                twice = key in seen
+                seen.add(key)
+            except TypeError:  # an unhashable key: PyYAML's own error below
+                continue
+            if twice:
+                raise yaml.constructor.ConstructorError(
+                    'while constructing a mapping', node.start_mark,
+                    f'key {key!r} given twice (the second would silently win)',
+                    key_node.start_mark)
+        return super().construct_mapping(node, deep=deep)  # type: ignore[misc]
+
+
+class _UniqueLoader(_UniqueKeys, _Loader):
+    """`_Loader` (ROS 2's numbers) refusing a key given twice."""
+
+
+class _UniqueSafeLoader(_UniqueKeys, yaml.SafeLoader):
+    """PyYAML's safe loader refusing a key given twice."""
+
+
 class SafeDumper(getattr(yaml, 'CSafeDumper', yaml.SafeDumper)):  # type: ignore[misc]
     """
     PyYAML's safe dumper (libyaml's where built), quoting a string that reads as ``1e-3``.
@@ -85,7 +122,8 @@ SafeDumper.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
                                  list('-+0123456789.'))
 
 
-def read_yaml(path: Path, what: str, ros_numbers: bool = True) -> Any:
+def read_yaml(path: Path, what: str, ros_numbers: bool = True,
+              unique_keys: bool = True) -> Any:
     """
     Parse a YAML file safely; every failure is one `ConfigError` line naming the file.
 
@@ -98,6 +136,10 @@ def read_yaml(path: Path, what: str, ros_numbers: bool = True) -> Any:
     ros_numbers : bool
         Read a plain ``1e-3`` as a number, as ROS 2 does (`_Loader`); False for a file only
         this package writes (a baseline file): PyYAML's own reading, as it was written.
+    unique_keys : bool
+        Refuse a key given twice in one mapping (`_UniqueKeys`); False for a ROS 2
+        parameters file, where ``rcl_yaml_param_parser`` lets the later value overwrite the
+        earlier (``parse.c``: "Overwriting, deallocate original"), as across files.
 
     Returns
     -------
@@ -109,11 +151,13 @@ def read_yaml(path: Path, what: str, ros_numbers: bool = True) -> Any:
     ------
     ConfigError
         The file is missing or unreadable, is not valid YAML (with the line and column), or
-        holds a number of thousands of digits or nesting too deep to parse.
+        holds a number of thousands of digits or nesting too deep to parse, or (with
+        ``unique_keys``) gives a key twice.
 
     """
     try:
-        loader = _Loader if ros_numbers else yaml.SafeLoader  # (both safe: plain data)
+        loader = ((_UniqueLoader if unique_keys else _Loader) if ros_numbers
+                  else (_UniqueSafeLoader if unique_keys else yaml.SafeLoader))  # all safe
         return yaml.load(path.read_text(encoding='utf-8'), Loader=loader)
     except FileNotFoundError:
         raise ConfigError(f'{what} not found: {path}') from None

@@ -203,6 +203,8 @@ def test_corrupted_name_count_is_skipped_counted_and_reported(env, tmp_path):
     (lambda f: f.update(velocity=[], effort=[]), 'rejected_malformed'),
     (lambda f: f.update(name=['pump_shaft', 'other']), 'rejected_malformed'),
     (lambda f: f.update(effort=[1.0, 2.0]), 'rejected_malformed'),
+    (lambda f: f.update(name=['pump_shaft'] * 2, velocity=f['velocity'] * 2,
+                        effort=f['effort'] * 2), 'rejected_malformed'),  # joint named twice
 ])
 def test_a_bag_of_only_defective_joint_states_says_no_estimate_and_why(env, tmp_path, change,
                                                                        counter):

@@ -77,6 +77,8 @@ JOINT_STATES = [
     joint_state([JOINT], [], [], position=[0.0]),  # neither: malformed
     joint_state([JOINT, 'wheel'], [1.0], [2.0, 3.0]),  # an array of the wrong length
     joint_state(['wheel'], [1.0], [2.0]),  # joint missing
+    joint_state([JOINT, 'wheel', JOINT], [1.0, 2.0, 3.0], [4.0, 5.0, 6.0]),  # named twice
+    joint_state([JOINT, 'wheel', JOINT], [1.0, 2.0, 3.0], [4.0, 5.0, 6.0]),  # cached so
     joint_state([JOINT], [300.0], [9.5], sec=0, nanosec=0),  # unset stamp
     joint_state([JOINT], [-250.0], [-3.0], frame_id='pump_frame'),
     joint_state([JOINT], [300.0], [9.5]),  # back to the first layout
@@ -89,6 +91,15 @@ def test_joint_states_decode_as_the_node_converted_them():
         raw = raw_of(msg, 'sensor_msgs/msg/JointState')
         assert decode(raw) == reference(SPEC[InputKind.JOINT_STATE], raw), msg.name
     assert decode.fallbacks == 0  # every one of them by the parser
+
+
+def test_a_joint_named_twice_is_malformed_by_the_parser_and_its_cache():
+    decode = decoder(InputKind.JOINT_STATE)
+    twice = joint_state([JOINT, 'wheel', JOINT], [1.0, 2.0, 3.0], [4.0, 5.0, 6.0])
+    raw = raw_of(twice, 'sensor_msgs/msg/JointState')
+    for _ in range(2):  # the second through the cached layout
+        assert decode(raw) == (None, None, None, Defect.MALFORMED)
+    assert decode.fallbacks == 0
 
 
 def test_parser_and_deserialiser_give_the_same_sample_defects_included():

@@ -18,6 +18,7 @@ import copy
 
 from pump_friction_ros.errors import ConfigError
 from pump_friction_ros.physics.pump_parameters import load_pump, pump_from_mapping
+from pump_friction_ros.yaml_files import read_yaml
 import pytest
 import yaml
 
@@ -119,6 +120,23 @@ def test_unreadable_files_give_clear_errors(tmp_path):
     scalar.write_text('42\n')
     with pytest.raises(ConfigError, match='expected a mapping'):
         load_pump(scalar)
+
+
+def test_a_key_given_twice_in_a_pump_file_is_refused_naming_it_and_its_line(tmp_path):
+    text = PAPER_PUMP.read_text()
+    assert text.count('film_clearance_m:') == 1
+    twice = tmp_path / 'twice.yaml'
+    twice.write_text(text.replace('film_clearance_m:', 'film_clearance_m: 12.0e-6\n'
+                                  '  film_clearance_m:', 1))
+    with pytest.raises(ConfigError) as err:
+        load_pump(twice)
+    message = str(err.value)
+    assert "key 'film_clearance_m' given twice" in message and '\n' not in message
+    line = text[:text.index('film_clearance_m:')].count('\n') + 2  # the second one's
+    assert f'(line {line},' in message
+    merged = tmp_path / 'merged.yaml'  # a merge key's values may be overridden, as YAML means
+    merged.write_text('base: &e {a: 1, b: 2}\nuse: {<<: *e, b: 3}\n')
+    assert read_yaml(merged, 'pump file')['use'] == {'a': 1, 'b': 3}
 
 
 def test_consistent_set_only_changes_documented_values(raw):

@@ -87,6 +87,16 @@ def test_later_params_files_override_earlier_ones_parameter_by_parameter(tmp_pat
         load_estimator_config([a, bad])
 
 
+def test_a_parameter_given_twice_in_one_file_takes_the_later_as_ros_2_does(tmp_path):
+    # rcl_yaml_param_parser's parse.c overwrites the earlier value ("Overwriting,
+    # deallocate original"); a pump file refuses the same (test_params)
+    path = tmp_path / 'twice.yaml'
+    path.write_text('torque_estimator:\n  ros__parameters:\n    hardware_id: first\n'
+                    '    cusum_drift_nm: 0.3\n    hardware_id: second\n')
+    config = load_estimator_config(path)
+    assert (config.hardware_id, config.cusum_drift_nm) == ('second', 0.3)
+
+
 def test_a_plain_exponent_without_a_dot_is_a_number_as_ros_2_reads_it(tmp_path):
     # rcl_yaml_param_parser takes an unquoted 1e-2 as a double (strtod); YAML 1.1, PyYAML's,
     # reads it as the string '1e-2' and the file ros2 launch accepts was refused

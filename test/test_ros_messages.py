@@ -74,6 +74,13 @@ def test_unfilled_arrays_and_missing_joint():
     assert joint_sample(msg, 'other') == (None, None, Defect.MISSING_JOINT)
 
 
+def test_a_joint_named_twice_is_malformed_not_one_of_the_two_taken():
+    msg = joint_state(['pump_shaft', 'wheel', 'pump_shaft'], [300.0, 1.0, 310.0],
+                      [4.0, 0.2, 4.5])
+    assert joint_sample(msg, 'pump_shaft') == (None, None, Defect.MALFORMED)
+    assert joint_sample(msg, 'wheel') == (1.0, 0.2, Defect.NONE)  # named once: still read
+
+
 def test_rclpy_style_array_fields_work_too():
     import array
     msg = SimpleNamespace(name=['pump_shaft'], position=array.array('d'),

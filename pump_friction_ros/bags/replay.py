@@ -369,7 +369,8 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
 
 _WHY = {
     'rejected_missing_joint': 'no JointState names joint "{joint}", the joint_name parameter',
-    'rejected_malformed': 'JointState arrays empty or not as long as name',
+    'rejected_malformed': 'JointState arrays empty or not as long as name, '
+                          'or the joint named twice',
     'rejected_undecodable': 'messages that do not deserialise',
     'rejected_future_stamp': 'header stamps more than max_stamp_lead_s ahead of the log time',
     'rejected_non_finite': 'NaN or infinite values',

@@ -60,7 +60,8 @@ class Defect(IntEnum):
 
     NONE = 0
     MISSING_JOINT = 1  # a JointState without the configured joint
-    MALFORMED = 2  # a JointState whose arrays do not match its names, or carry nothing
+    MALFORMED = 2  # a JointState whose arrays do not match its names, carry nothing, or
+    #                name the joint twice (which one is the shaft?)
     UNDECODABLE = 3  # a bag message that does not deserialise
 
 

@@ -462,7 +462,7 @@ def _resolved(checked: dict[str, Any], origins: dict[str, str], default_origin: 
 
 def _read_params_file(path: Path) -> dict[str, Any]:
     """Return the merged ``ros__parameters`` of one file's sections for this node."""
-    data = read_yaml(path, 'parameters file')
+    data = read_yaml(path, 'parameters file', unique_keys=False)  # the later wins, as in ROS 2
     if not isinstance(data, dict):
         raise ConfigError(f'{path}: expected "{NODE_NAME}: ros__parameters: ..."')
     merged: dict[str, Any] = {}

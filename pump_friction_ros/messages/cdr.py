@@ -215,7 +215,8 @@ def joint_layout(raw: bytes, joint: str) -> JointLayout:
     velocity = effort = None
     if index < 0:
         defect = Defect.MISSING_JOINT
-    elif any(n not in (0, count) for n in counts) or not (counts[1] or counts[2]):
+    elif any(n not in (0, count) for n in counts) or not (counts[1] or counts[2]) \
+            or names.count(joint) > 1:
         defect = Defect.MALFORMED
     else:
         defect = Defect.NONE

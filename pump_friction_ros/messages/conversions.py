@@ -138,7 +138,7 @@ def joint_sample(msg: Any, joint_name: str) -> tuple[float | None, float | None,
     several). An empty ``velocity`` / ``effort`` array means "not filled"; an array that is
     neither empty nor as long as ``name`` makes the message malformed (sensor_msgs says
     all arrays have the size of ``name`` or are empty), and so does a message carrying
-    neither speed nor torque.
+    neither speed nor torque, or naming the joint twice (neither can be taken for the shaft).
 
     Parameters
     ----------
@@ -159,7 +159,8 @@ def joint_sample(msg: Any, joint_name: str) -> tuple[float | None, float | None,
         return None, None, Defect.MISSING_JOINT
     i, n = names.index(joint_name), len(names)
     velocity, effort = msg.velocity, msg.effort
-    if any(len(a) not in (0, n) for a in (msg.position, velocity, effort)):
+    if any(len(a) not in (0, n) for a in (msg.position, velocity, effort)) \
+            or names.count(joint_name) > 1:  # which of the two is the shaft: nobody can say
         return None, None, Defect.MALFORMED
     speed = float(velocity[i]) if len(velocity) else None
     torque = float(effort[i]) if len(effort) else None
