@@ -225,6 +225,13 @@ def test_torque_from_table_outside_its_envelope_warns_on_stderr(capsys, tmp_path
     assert 'warning: speed above the table' in err
 
 
+def test_a_reversed_viscosity_range_is_said_in_the_cst_given(capsys, tmp_path):
+    code, _, err = run(capsys, 'build-table', '--viscosity-cst', '80', '20',
+                       '--out', str(tmp_path / 't.npz'))
+    assert code == 2 and 'LOW must be below HIGH, got 80 20' in err and 'm^2/s' not in err
+    assert not (tmp_path / 't.npz').exists()
+
+
 def test_table_for_another_pump_exits_2_saying_how_to_rebuild(capsys, tmp_path):
     out = tmp_path / 'tab.npz'
     run(capsys, 'build-table', '--out', str(out), '--quiet', '--max-speed-rpm', '2000')

@@ -31,7 +31,7 @@ from . import data_commands
 from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
 from .. import __version__, MODEL_VERSION
-from ..errors import PumpFrictionError
+from ..errors import PumpFrictionError, UsageError
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
 from ..physics.units import (
@@ -202,8 +202,11 @@ def _cmd_build_table(args: argparse.Namespace) -> int:
 
         spec = table_spec_for(EstimatorConfig(), params.oil.viscosity_m2_s, base)
     else:
-        spec = base.covering(cst_to_m2_s(args.viscosity_cst[0]),
-                             cst_to_m2_s(args.viscosity_cst[1]))
+        low_cst, high_cst = args.viscosity_cst
+        if not low_cst < high_cst:  # said in the units given, not after conversion
+            raise UsageError(f'argument --viscosity-cst: LOW must be below HIGH, got {low_cst:g} '
+                             f'{high_cst:g} (see pump_friction build-table --help)')
+        spec = base.covering(cst_to_m2_s(low_cst), cst_to_m2_s(high_cst))
     outputs = StagedOutputs()
     try:
         if args.out:  # checked and made before the build; moved into place at the end
