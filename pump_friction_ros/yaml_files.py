@@ -109,6 +109,11 @@ class _UniqueSafeLoader(_UniqueKeys, yaml.SafeLoader):
     """PyYAML's safe loader refusing a key given twice."""
 
 
+_LOADERS = {(True, True): _UniqueLoader, (True, False): _Loader,
+            (False, True): _UniqueSafeLoader, (False, False): yaml.SafeLoader}
+"""(ros_numbers, unique_keys) -> loader, every one safe: plain data, no objects."""
+
+
 class SafeDumper(getattr(yaml, 'CSafeDumper', yaml.SafeDumper)):  # type: ignore[misc]
     """
     PyYAML's safe dumper (libyaml's where built), quoting a string that reads as ``1e-3``.
@@ -156,9 +161,8 @@ def read_yaml(path: Path, what: str, ros_numbers: bool = True,
 
     """
     try:
-        loader = ((_UniqueLoader if unique_keys else _Loader) if ros_numbers
-                  else (_UniqueSafeLoader if unique_keys else yaml.SafeLoader))  # all safe
-        return yaml.load(path.read_text(encoding='utf-8'), Loader=loader)
+        return yaml.load(path.read_text(encoding='utf-8'),
+                         Loader=_LOADERS[ros_numbers, unique_keys])
     except FileNotFoundError:
         raise ConfigError(f'{what} not found: {path}') from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -78,7 +78,6 @@ JOINT_STATES = [
     joint_state([JOINT, 'wheel'], [1.0], [2.0, 3.0]),  # an array of the wrong length
     joint_state(['wheel'], [1.0], [2.0]),  # joint missing
     joint_state([JOINT, 'wheel', JOINT], [1.0, 2.0, 3.0], [4.0, 5.0, 6.0]),  # named twice
-    joint_state([JOINT, 'wheel', JOINT], [1.0, 2.0, 3.0], [4.0, 5.0, 6.0]),  # cached so
     joint_state([JOINT], [300.0], [9.5], sec=0, nanosec=0),  # unset stamp
     joint_state([JOINT], [-250.0], [-3.0], frame_id='pump_frame'),
     joint_state([JOINT], [300.0], [9.5]),  # back to the first layout
