@@ -189,7 +189,40 @@ def test_diagnostic_values_are_numbers_with_units_in_their_keys(table):
         assert key in COUNTERS or key in ('level', 'last_alarm_level', 'efficiency',
                                           'baseline_complete', 'detection_held') or \
             key.endswith(('_nm', '_nm_s', '_pa', '_rad_s', '_m2_s', '_kg_m2', '_s', 'scale',
-                          '_std', '_per_k'))
+                          '_std', '_per_k', '_c'))
+
+
+def test_diagnostics_give_the_oil_temperature_now_and_the_one_the_baseline_was_learnt_at(
+        table):
+    run = simulate_duty_cycle(table, DutyCycle(duration_s=120.0), seed=4)
+    change_ns = 60 * NS  # the oil at 41.5 degC for the first minute, 44.0 after it
+
+    class WithTopic:
+        """The estimator, each pressure sample preceded by the oil temperature's."""
+
+        def __init__(self, estimator):
+            self.estimator = estimator
+
+        def on_input(self, kind, stamp, *values):
+            if kind == K.LOAD_PRESSURE:
+                self.estimator.on_input(K.OIL_TEMPERATURE, stamp,
+                                        41.5 if stamp < change_ns else 44.0)
+            return self.estimator.on_input(kind, stamp, *values)
+
+    topic = make(table, dataclasses.replace(QUICK_BASELINE, viscosity_source='temperature'))
+    out = feed(WithTopic(topic), run)
+    learnt_s = topic.monitor.baseline.learnt_s  # learnt within the first minute
+    assert 0.0 < learnt_s < 60.0 and out[-1].stamp_ns > change_ns
+    values = dict(topic.diagnostics(out[-1].stamp_ns).values)
+    # the temperature in, back through the oil's law (to the law's round trip)
+    assert float(values['oil_temperature_c']) == pytest.approx(44.0, abs=1e-9)
+    assert float(values['baseline_oil_temperature_c']) == pytest.approx(41.5, abs=1e-9)
+    # without the topic the node does not know the oil's temperature, and says NaN
+    assumed = make(table, QUICK_BASELINE)
+    out = feed(assumed, run)
+    assert not assumed.monitor.learning
+    values = dict(assumed.diagnostics(out[-1].stamp_ns).values)
+    assert values['oil_temperature_c'] == 'nan' and values['baseline_oil_temperature_c'] == 'nan'
 
 
 def _feed(table, run, config=CONFIG):

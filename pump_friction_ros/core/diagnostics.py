@@ -108,6 +108,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         ('speed_rad_s', est.speed_rad_s if est else nan),
         ('pressure_diff_pa', est.pressure_diff_pa if est else nan),
         ('viscosity_m2_s', est.viscosity_m2_s if est else nan),
+        # the temperature topic's, through the oil's law (NaN: the viscosity is assumed)
+        ('oil_temperature_c', mon.oil_temperature_c(est.viscosity_m2_s) if est else nan),
         ('expected_torque_nm', est.expected_nm if est else nan),
         ('theoretical_torque_nm', est.theoretical_nm if est else nan),
         ('friction_torque_nm', est.friction_nm if est else nan),
@@ -146,6 +148,9 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         key = f'baseline_{name}_scale' if relative else f'baseline_{name}'
         values += [(key, float(value) + (1.0 if relative else 0.0)), (f'{key}_std', float(std))]
     values.append(('baseline_window_std_nm', math.sqrt(fit.window_var_nm2)))
+    # the oil it was learnt on: the farther the oil runs from it, the more the healthy level
+    # now is the model's extrapolation (docs/monitor.md)
+    values.append(('baseline_oil_temperature_c', mon.baseline_temperature_c))
     # the torque reads this times the oil's warming since commissioning high: learnt drift
     values.append(('baseline_torque_drift_per_k', mon.measurement_drift_per_k))
     values.append(('alarm_onset_s', mon.alarm_onset_s))

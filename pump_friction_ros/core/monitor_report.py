@@ -130,6 +130,38 @@ class MonitorReport:
             else ''
 
     @property
+    def baseline_temperature_c(self) -> float:
+        """
+        Return the oil temperature the healthy baseline was learnt at [degC].
+
+        Returns
+        -------
+        float
+            The running-weighted mean over its windows (``Baseline.temperature_c``); NaN
+            before it is learnt or without temperature topic.
+
+        """
+        return self.baseline.temperature_c if self.baseline is not None else math.nan
+
+    def oil_temperature_c(self, viscosity_m2_s: float) -> float:
+        """
+        Return the oil temperature at a viscosity, by the oil's law [degC].
+
+        Parameters
+        ----------
+        viscosity_m2_s : float
+            An estimate's viscosity [m^2/s].
+
+        Returns
+        -------
+        float
+            The temperature the oil's Walther law gives it (`OilAllowance.temperature_c`);
+            NaN where the viscosity is assumed (no temperature topic).
+
+        """
+        return self._oil.temperature_c(viscosity_m2_s) if self._oil is not None else math.nan
+
+    @property
     def measurement_drift_per_k(self) -> float:
         """Return the learnt drift of the torque against the pressure (``gain_follow``) [1/K]."""
         return math.nan if self._gain_follow is None else self._gain_follow.drift_per_k
