@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Reading a YAML file (pump files, node parameters files) with one-line errors."""
+"""Reading a YAML file (pump files, node parameters files) with one-line errors; writing one."""
 
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import re
 import sys
 from typing import Any
 
+import numpy as np
 import yaml
 
 from .errors import ConfigError
@@ -125,6 +126,16 @@ class SafeDumper(getattr(yaml, 'CSafeDumper', yaml.SafeDumper)):  # type: ignore
 
 SafeDumper.add_implicit_resolver('tag:yaml.org,2002:float', _EXPONENT_FLOAT,
                                  list('-+0123456789.'))
+
+
+def _numpy_scalar(dumper: yaml.SafeDumper, value: np.generic) -> yaml.Node:
+    """Represent a numpy scalar as the plain number (or bool) it holds."""
+    return dumper.represent_data(value.item())
+
+
+# a numpy float is a subclass of float, but PyYAML's safe dumper matches types exactly and
+# refuses it: a state with one in it (the monitor's, the isolation's sums) was not written
+SafeDumper.add_multi_representer(np.generic, _numpy_scalar)
 
 
 def read_yaml(path: Path, what: str, ros_numbers: bool = True,

@@ -39,6 +39,7 @@ from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.inputs import InputKind as K
 from pump_friction_ros.core.node_parameters import EstimatorConfig
 from pump_friction_ros.errors import BaselineError, BaselineMismatchError, OutputError
+from pump_friction_ros.sim.duty_cycle import DutyCycle, simulate_duty_cycle
 from pump_friction_ros.table.friction_table import build_table
 import pytest
 import yaml
@@ -111,6 +112,56 @@ def test_round_trip_through_the_file_restores_the_monitor_state_exactly(table, t
     load_baseline(fresh, path)
     assert same(fresh.monitor.state_dict(), core.monitor.state_dict())
     assert fresh.learnt == (N_MONITORED, *first_last())
+
+
+def _numpy_values(value, where='state'):
+    """Yield where a structure holds a numpy value instead of a plain one."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield from _numpy_values(item, f'{where}/{key}')
+    elif isinstance(value, (list, tuple)):
+        for k, item in enumerate(value):
+            yield from _numpy_values(item, f'{where}[{k}]')
+    elif type(value).__module__ == 'numpy':
+        yield where
+
+
+def test_a_baseline_learnt_with_the_temperature_topic_is_saved_and_restored(table, tmp_path):
+    # the torque measurement's drift with the oil (`gain_follow`) enters every window's
+    # change from the baseline: its state, the EWMA's and the isolation's, must stay plain
+    # numbers, or the file is refused as "not plain values" and nothing learnt is kept
+    run = simulate_duty_cycle(table, DutyCycle(duration_s=60.0), seed=4)
+    config = replace(CONFIG, viscosity_source='temperature', baseline_learn_s=10.0)
+    core = make(table, config)
+    t_joint = np.round(run.t_s * 1e9).astype(np.int64).tolist()
+    t_press = np.round(run.pressure_t_s * 1e9).astype(np.int64).tolist()
+    k = 0
+    for stamp, dp in zip(t_press, run.pressure_diff_pa.tolist(), strict=True):
+        core.on_input(K.OIL_TEMPERATURE, stamp, 41.5 if stamp < 30 * NS else 44.0)
+        core.on_input(K.LOAD_PRESSURE, stamp, dp)
+        while k < len(t_joint) and t_joint[k] <= stamp:
+            core.on_input(K.JOINT_STATE, t_joint[k], float(run.speed_rad_s[k]),
+                          float(run.torque_nm[k]))
+            k += 1
+    mon = core.monitor
+    assert not mon.learning and mon.ewma_nm != 0.0  # windows judged after the baseline
+    assert list(_numpy_values(mon.state_dict())) == []
+    path = tmp_path / 'baseline.yaml'
+    write_baseline(path, baseline_document(core, origin='test'))
+    fresh = make(table, config)
+    load_baseline(fresh, path)
+    assert same(fresh.monitor.state_dict(), mon.state_dict())
+    assert fresh.monitor.baseline_temperature_c == pytest.approx(41.5, abs=1e-9)
+
+
+def test_a_numpy_number_in_a_document_is_written_as_the_plain_number(tmp_path):
+    path = tmp_path / 'baseline.yaml'
+    document = {'x': np.float64(0.1), 'n': np.int64(3), 'flag': np.bool_(True),
+                'sums': [np.float32(1.5), np.float64(-2.0)], 'none': np.float64('nan')}
+    write_baseline(path, document)
+    back = yaml.safe_load(path.read_text())
+    assert back['x'] == 0.1 and back['n'] == 3 and back['flag'] is True
+    assert back['sums'] == [1.5, -2.0] and math.isnan(back['none'])
 
 
 def test_learning_on_after_a_clock_restart_saves_a_file_that_loads(table, tmp_path):

@@ -438,8 +438,9 @@ class FaultIsolation:
     def state(self) -> dict[str, object]:
         """Return the sums as plain values."""
         st = self.stats
-        return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': st.c, 'count': st.count,
-                'windows': st.windows, 'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
+        return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': float(st.c),
+                'count': float(st.count), 'windows': int(st.windows),
+                'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
                 'b1': st.b1.tolist(), 'bv': st.bv.tolist(), 'bv1': st.bv1.tolist(),
                 'drift': self.drift.state(), 'bias': self.bias.state(),
                 'episodes': self.episodes.state()}

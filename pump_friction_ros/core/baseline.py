@@ -371,10 +371,11 @@ class BaselineLearner:
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values (for the baseline file)."""
-        return {'a': self.a.tolist(), 'b': self.b.tolist(), 'c': self.c,
-                'weight': self.weight, 'windows': self.windows, 'learnt_s': self.learnt_s,
-                'time_sum_s2': self.time_sum_s2, 'temperature_sum_c_s': self.temperature_sum_c_s,
-                'temperature_time_s': self.temperature_time_s}
+        return {'a': self.a.tolist(), 'b': self.b.tolist(), 'c': float(self.c),
+                'weight': float(self.weight), 'windows': int(self.windows),
+                'learnt_s': float(self.learnt_s), 'time_sum_s2': float(self.time_sum_s2),
+                'temperature_sum_c_s': float(self.temperature_sum_c_s),
+                'temperature_time_s': float(self.temperature_time_s)}
 
     def load(self, state: dict[str, object]) -> None:
         """

@@ -208,7 +208,7 @@ class Commissioning:
         """Return the sums as plain values."""
         return {'learner': self.learner.state(), 'older': self.older.state(),
                 'recent': self.recent.state(), 'restarts': self.restarts,
-                'drift_nm': self.drift_nm, 'direction': self.direction,
+                'drift_nm': float(self.drift_nm), 'direction': float(self.direction),
                 'reversals': self.reversals}
 
     def load(self, state: dict[str, object]) -> None:

@@ -206,8 +206,9 @@ class DriftNuisance:
 
     def state(self) -> dict[str, object]:
         """Return the sums as plain values."""
-        return {'g_before': self.g_before, 'b_before': self.b_before,
-                'g_change': self.g_change, 'b_change': self.b_change, 'x': self.x.tolist(),
+        return {'g_before': float(self.g_before), 'b_before': float(self.b_before),
+                'g_change': float(self.g_change), 'b_change': float(self.b_change),
+                'x': self.x.tolist(),
                 'x1': self.x1.tolist()}
 
     def load(self, state: dict[str, object]) -> None:

@@ -176,7 +176,7 @@ class GainFollow:
         per_k = self.per_k
         term = (temperature_c - reference_c) * (per_k[0] * float(signatures[_GAINS[0]])
                                                 + per_k[1] * float(signatures[_GAINS[1]]))
-        return term if math.isfinite(term) else 0.0
+        return float(term) if math.isfinite(term) else 0.0  # (a plain float: it is state)
 
     def follow(self, isolation: FaultIsolation, temperature_c: float, reference_c: float,
                alarm_verdict: str = Verdict.NONE) -> bool:

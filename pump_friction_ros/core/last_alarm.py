@@ -142,11 +142,12 @@ class LastAlarm:
 
     def state(self) -> dict[str, object]:
         """Return the last alarm as plain values."""
-        return {'onset_s': self.onset_s, 'cleared_s': self.cleared_s, 'followed': self.followed,
-                'level': self.level, 'cusum_nm_s': self.cusum_nm_s, 'verdict': self.verdict,
+        return {'onset_s': float(self.onset_s), 'cleared_s': float(self.cleared_s),
+                'followed': self.followed, 'level': int(self.level),
+                'cusum_nm_s': float(self.cusum_nm_s), 'verdict': self.verdict,
                 'words': self.words,
-                'valve_plate_scale': self.valve_plate_scale,
-                'valve_plate_scale_std': self.valve_plate_scale_std}
+                'valve_plate_scale': float(self.valve_plate_scale),
+                'valve_plate_scale_std': float(self.valve_plate_scale_std)}
 
     def load(self, state: dict[str, object]) -> None:
         """

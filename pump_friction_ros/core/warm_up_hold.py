@@ -204,8 +204,9 @@ class WarmUpHold:
 
     def state(self) -> dict[str, object]:
         """Return what outlives a restart: holds seen moving, the last window's time, a hold."""
-        return {'moved': self.moved, 'last_s': self.last_s, 'held': self.held,
-                'reason': self.reason, 'since_s': self._since_s, 'check': self.check.state()}
+        return {'moved': self.moved, 'last_s': float(self.last_s), 'held': self.held,
+                'reason': self.reason, 'since_s': float(self._since_s),
+                'check': self.check.state()}
 
     def load(self, state: dict[str, object]) -> None:
         """
