@@ -40,12 +40,13 @@ from pump_friction_ros.core.baseline_file import (  # noqa: E402
     write_baseline,
 )
 from pump_friction_ros.core.estimator import estimator_from_config  # noqa: E402
+from pump_friction_ros.core.inputs import InputKind as K  # noqa: E402
 from pump_friction_ros.core.node_parameters import load_estimator_config  # noqa: E402
 from pump_friction_ros.node.torque_estimator import TorqueEstimatorNode  # noqa: E402
 from pump_friction_ros.table.friction_table import build_table  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
-from sensor_msgs.msg import FluidPressure, JointState  # noqa: E402
+from sensor_msgs.msg import FluidPressure, JointState, Temperature  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
@@ -200,6 +201,52 @@ def test_the_baseline_is_saved_periodically_once_something_is_learnt(ros, tmp_pa
         assert doc['provenance']['parameters']['drive_loss_torque_nm'] == 0.05
         assert doc['about']['origin'] == 'node /torque_estimator'
         assert node.baseline.status == 'saved'
+    finally:
+        close(node, probe, ex)
+
+
+def test_a_node_with_the_temperature_topic_saves_what_it_judged_after_its_baseline(
+        ros, table_file, tmp_path):
+    # With the oil temperature, the torque drift's term enters each window's change from
+    # the baseline; it once made the state numpy floats, and every save was refused.
+    path = tmp_path / 'baseline.yaml'
+    config = load_estimator_config([PARAMS, SAMPLE_PARAMS])
+    config = config.__class__(**{**config.__dict__, 'table_file': table_file,
+                                 'viscosity_source': 'temperature'})
+    core = estimator_from_config(config)
+    t0 = 1_700_000_000 * NS
+    for k in range(round(1.5 * config.baseline_learn_s * 1000)):  # 1 kHz of steady running
+        stamp = t0 + k * 1_000_000
+        if k % 100 == 0:
+            core.on_input(K.OIL_TEMPERATURE, stamp, 40.0)
+        core.on_input(K.LOAD_PRESSURE, stamp, 100e5)
+        core.on_input(K.JOINT_STATE, stamp, 400.0, 10.0)
+    assert not core.monitor.learning  # a complete baseline, learnt at 40 degC
+    # written as plain numbers whatever the core's types: what is tested is the node's save
+    document = json.loads(json.dumps(baseline_document(core, origin='test'), default=float))
+    write_baseline(path, document)
+    node = ros(f'baseline_file:={path}', 'viscosity_source:=temperature',
+               'baseline_save_period_s:=1.0', 'diagnostics_rate_hz:=20.0')
+    probe, ex = session(node)
+    oil = probe.create_publisher(Temperature, 'oil_temperature', 10)
+    try:
+        assert node.baseline.status == 'loaded'
+        assert spin_until(ex, lambda: probe.count_subscribers('oil_temperature') > 0)
+        judged = node.core.monitor.windows
+        end = time.monotonic() + 20.0
+        while time.monotonic() < end and not (
+                node.core.monitor.windows > judged + 3 and node.baseline.status == 'saved'):
+            stamp = node.get_clock().now().nanoseconds
+            sec, nanosec = divmod(stamp, NS)
+            oil.publish(Temperature(header=Header(stamp=Time(sec=sec, nanosec=nanosec)),
+                                    temperature=42.0, variance=0.0))
+            probe.send(stamp)
+            ex.spin_once(timeout_sec=0.002)
+        assert node.core.monitor.windows > judged + 3, 'no window judged after the baseline'
+        assert node.baseline.status == 'saved', node.baseline.status
+        saved = read_baseline(path)
+        assert saved['learnt']['samples'] > core.learnt[0]  # what it ran since is kept
+        assert saved['monitor_state']['ewma_nm'] != 0.0
     finally:
         close(node, probe, ex)
 
