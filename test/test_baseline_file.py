@@ -44,6 +44,8 @@ from pump_friction_ros.table.friction_table import build_table
 import pytest
 import yaml
 
+from .test_estimator import feed as feed_run, WithOilTemperature
+
 NS = 1_000_000_000
 T0 = 1_700_000_000 * NS
 CONFIG = EstimatorConfig(oil_viscosity_m2_s=46e-6, drive_loss_torque_nm=0.05)
@@ -133,16 +135,7 @@ def test_a_baseline_learnt_with_the_temperature_topic_is_saved_and_restored(tabl
     run = simulate_duty_cycle(table, DutyCycle(duration_s=60.0), seed=4)
     config = replace(CONFIG, viscosity_source='temperature', baseline_learn_s=10.0)
     core = make(table, config)
-    t_joint = np.round(run.t_s * 1e9).astype(np.int64).tolist()
-    t_press = np.round(run.pressure_t_s * 1e9).astype(np.int64).tolist()
-    k = 0
-    for stamp, dp in zip(t_press, run.pressure_diff_pa.tolist(), strict=True):
-        core.on_input(K.OIL_TEMPERATURE, stamp, 41.5 if stamp < 30 * NS else 44.0)
-        core.on_input(K.LOAD_PRESSURE, stamp, dp)
-        while k < len(t_joint) and t_joint[k] <= stamp:
-            core.on_input(K.JOINT_STATE, t_joint[k], float(run.speed_rad_s[k]),
-                          float(run.torque_nm[k]))
-            k += 1
+    feed_run(WithOilTemperature(core, lambda ns: 41.5 if ns < 30 * NS else 44.0), run)
     mon = core.monitor
     assert not mon.learning and mon.ewma_nm != 0.0  # windows judged after the baseline
     assert list(_numpy_values(mon.state_dict())) == []

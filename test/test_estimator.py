@@ -49,6 +49,18 @@ def feed(estimator, run):
     return out
 
 
+class WithOilTemperature:
+    """An estimator whose every pressure sample comes after the oil temperature at its stamp."""
+
+    def __init__(self, estimator, celsius_at):
+        self.estimator, self.celsius_at = estimator, celsius_at
+
+    def on_input(self, kind, stamp, *values):
+        if kind == K.LOAD_PRESSURE:
+            self.estimator.on_input(K.OIL_TEMPERATURE, stamp, self.celsius_at(stamp))
+        return self.estimator.on_input(kind, stamp, *values)
+
+
 CONFIG = EstimatorConfig(oil_viscosity_m2_s=46e-6, drive_loss_torque_nm=0.05)
 QUICK_BASELINE = dataclasses.replace(CONFIG, baseline_learn_s=10.0)
 """Commissioning of 10 s of monitored running, so that a fault can start early in a test."""
@@ -196,21 +208,8 @@ def test_diagnostics_give_the_oil_temperature_now_and_the_one_the_baseline_was_l
         table):
     run = simulate_duty_cycle(table, DutyCycle(duration_s=120.0), seed=4)
     change_ns = 60 * NS  # the oil at 41.5 degC for the first minute, 44.0 after it
-
-    class WithTopic:
-        """The estimator, each pressure sample preceded by the oil temperature's."""
-
-        def __init__(self, estimator):
-            self.estimator = estimator
-
-        def on_input(self, kind, stamp, *values):
-            if kind == K.LOAD_PRESSURE:
-                self.estimator.on_input(K.OIL_TEMPERATURE, stamp,
-                                        41.5 if stamp < change_ns else 44.0)
-            return self.estimator.on_input(kind, stamp, *values)
-
     topic = make(table, dataclasses.replace(QUICK_BASELINE, viscosity_source='temperature'))
-    out = feed(WithTopic(topic), run)
+    out = feed(WithOilTemperature(topic, lambda ns: 41.5 if ns < change_ns else 44.0), run)
     learnt_s = topic.monitor.baseline.learnt_s  # learnt within the first minute
     assert 0.0 < learnt_s < 60.0 and out[-1].stamp_ns > change_ns
     values = dict(topic.diagnostics(out[-1].stamp_ns).values)
