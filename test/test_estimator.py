@@ -229,8 +229,25 @@ def _feed(table, run, config=CONFIG):
     return est, feed(est, run)
 
 
+BANDED = dataclasses.replace(CONFIG, oil_temperature_band_c=3.0)
+"""An installation that states its oil may swing 3 K about commissioning's temperature (the
+simulations' oil stays at the viscosity the node is told)."""
+
+
+def _band_viscosity_rise(config):
+    """Return the oil's relative viscosity rise over the band, colder [-]."""
+    law = WaltherViscosity(config.oil_viscosity_40c_m2_s, config.oil_viscosity_100c_m2_s)
+    low, high = -30.0, 150.0  # the told viscosity's temperature, by bisection
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        low, high = (mid, high) if law(mid) > config.oil_viscosity_m2_s else (low, mid)
+    return law(low - config.oil_temperature_band_c) / config.oil_viscosity_m2_s - 1.0
+
+
 def test_ten_minutes_of_nominal_noisy_data_at_1khz_raise_no_alarm(table):
     run = simulate_duty_cycle(table, DutyCycle(duration_s=600.0), seed=21)
+    banded, banded_out = _feed(table, run, BANDED)  # the oil may have moved 3 K
+    assert max(e.level for e in banded_out) == OK
     est, out = _feed(table, run)
     assert len(out) == run.t_s.size
     assert max(e.level for e in out) == OK
@@ -244,6 +261,12 @@ def test_ten_minutes_of_nominal_noisy_data_at_1khz_raise_no_alarm(table):
     assert abs(est.last.valve_plate_scale - 1.0) < 1.96 * mon.valve_plate_scale_std < 0.15
     assert abs(mon.theta_rest - 1.0) < 1.96 * mon.rest_scale_std < 0.15
     assert est.counts['stale_skips'] == 0
+    # with the band the interval also spans what an oil 3 K colder does to the reading: at
+    # most the viscosity's rise (the film shear is linear in it, sec. 4.2) beyond the above
+    held = 1.96 * mon.valve_plate_scale_std
+    wide = 1.96 * banded.monitor.valve_plate_scale_std
+    assert abs(banded.last.valve_plate_scale - 1.0) < wide
+    assert held < wide < held + _band_viscosity_rise(BANDED)
 
 
 def test_no_alarm_while_the_baseline_is_learnt_and_diagnostics_say_so(table):
@@ -262,6 +285,8 @@ def test_valve_plate_step_of_fifty_percent_is_flagged_and_attributed(table):
     """+50 % valve-plate friction at t = 40 s, after commissioning: WARN within 20 s."""
     run = simulate_duty_cycle(table, DutyCycle(duration_s=180.0), seed=3,
                               wear=wear_step(40.0, 1.5))
+    banded, banded_out = _feed(table, run, dataclasses.replace(QUICK_BASELINE,
+                                                               oil_temperature_band_c=3.0))
     est, out = _feed(table, run, QUICK_BASELINE)
     t = np.array([e.stamp_ns for e in out]) / NS
     level = np.array([e.level for e in out])
@@ -275,6 +300,16 @@ def test_valve_plate_step_of_fifty_percent_is_flagged_and_attributed(table):
     assert abs(final.valve_plate_scale - 1.5) < 1.96 * final.valve_plate_scale_std < 0.25
     assert est.monitor.verdict(1.0)[0] == 'valve_plate'
     assert 'valve plate' in est.diagnostics(final.stamp_ns).message
+    # with a 3 K band: the same verdict, later, and an interval that also spans what the
+    # band's oil moves the reading, at most the viscosity's rise times the truth
+    t_band = np.array([e.stamp_ns for e in banded_out]) / NS
+    level_band = np.array([e.level for e in banded_out])
+    assert first_warn < t_band[level_band >= WARN].min() < 60.0
+    wide = 1.96 * banded_out[-1].valve_plate_scale_std
+    assert abs(banded_out[-1].valve_plate_scale - 1.5) < wide
+    held = 1.96 * final.valve_plate_scale_std
+    assert held < wide < held + 1.5 * _band_viscosity_rise(BANDED)
+    assert banded.monitor.verdict(1.0)[0] == 'valve_plate'
 
 
 def test_a_bearing_fault_is_not_named_valve_plate(table):

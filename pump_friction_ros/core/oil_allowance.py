@@ -22,7 +22,7 @@ warmer or cooler, and two things move the torque though nothing wore:
    plate's film shear is linear in the viscosity (Couette shear, sec. 4.2) and the
    bearing's drag rises with it; on an ISO VG 68 oil at 50 degC, 3 K are 14 % of the
    viscosity (ASTM D341). Measured on the bank's steps without temperature topic, seed 1:
-   an oil swinging +-2.9 K over 20 min raised a WARN at every swing's warm side. The
+   an oil swinging +-2.9 K over 20 min raised a WARN at every swing's cold side. The
    friction change over ``oil_temperature_band_c`` either side (0, none, by default: the
    band is the installation's, from its records), along the speed axis
    (`band_friction_nm`), per component, times the installation's friction levels that the
