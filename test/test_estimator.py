@@ -237,11 +237,8 @@ simulations' oil stays at the viscosity the node is told)."""
 def _band_viscosity_rise(config):
     """Return the oil's relative viscosity rise over the band, colder [-]."""
     law = WaltherViscosity(config.oil_viscosity_40c_m2_s, config.oil_viscosity_100c_m2_s)
-    low, high = -30.0, 150.0  # the told viscosity's temperature, by bisection
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if law(mid) > config.oil_viscosity_m2_s else (low, mid)
-    return law(low - config.oil_temperature_band_c) / config.oil_viscosity_m2_s - 1.0
+    told_c = law.temperature_c(config.oil_viscosity_m2_s)
+    return law(told_c - config.oil_temperature_band_c) / config.oil_viscosity_m2_s - 1.0
 
 
 def test_ten_minutes_of_nominal_noisy_data_at_1khz_raise_no_alarm(table):
@@ -285,8 +282,8 @@ def test_valve_plate_step_of_fifty_percent_is_flagged_and_attributed(table):
     """+50 % valve-plate friction at t = 40 s, after commissioning: WARN within 20 s."""
     run = simulate_duty_cycle(table, DutyCycle(duration_s=180.0), seed=3,
                               wear=wear_step(40.0, 1.5))
-    banded, banded_out = _feed(table, run, dataclasses.replace(QUICK_BASELINE,
-                                                               oil_temperature_band_c=3.0))
+    banded, banded_out = _feed(table, run, dataclasses.replace(
+        QUICK_BASELINE, oil_temperature_band_c=BANDED.oil_temperature_band_c))
     est, out = _feed(table, run, QUICK_BASELINE)
     t = np.array([e.stamp_ns for e in out]) / NS
     level = np.array([e.level for e in out])
