@@ -128,6 +128,56 @@ def test_an_oil_swing_within_the_band_raises_no_alarm_and_one_beyond_it_does(see
     assert _swing(None, 0.95, seed)[1] and _swing(BAND, 3.0, seed)[1]
 
 
+WIDE = OilAllowance([0.0, 1000.0], [0.0, 0.4])
+"""A band of 0.02-0.36 N m at 50-900 rad/s: many times the CUSUM's allowance k."""
+
+
+def _directions(oil, side, stretch_windows, seed, windows=1200):
+    """
+    Run the tests' pump with each direction held for ``stretch_windows`` windows (0.25 s).
+
+    From 60 s of running on, the oil sits at ``side`` times the WIDE band's change (> 0:
+    colder). Returns the monitor, the largest CUSUM of each cause over the run [N m s], and
+    whether it ever left OK.
+    """
+    rng = np.random.default_rng(seed)
+    mon = _monitor(oil)
+    t, alarmed, n = 0.0, False, WINDOW_SAMPLES
+    largest = np.zeros(6)
+    for w in range(windows):
+        speed, vp, other, _, th, _ = oil_window(rng)
+        sign = 1.0 if (w // stretch_windows) % 2 == 0 else -1.0
+        h = baseline_regressors(vp, other, th * sign, sign, 0.0)
+        e = float(h @ TRUTH) + rng.normal(0.0, 0.01)
+        if t > 60.0:
+            e += side * (1.0 + TRUTH[0]) * WIDE.window_nm(speed)
+        trace = mon.update_many([t + i * DT for i in range(n)], [DT] * n, [e] * n, [vp] * n,
+                                [other] * n, [th] * n, [sign] * n, None, [speed] * n)
+        alarmed = alarmed or max(trace.level) > OK
+        largest = np.maximum(largest, np.maximum(mon._pos, mon._neg))
+        t += n * DT
+    return mon, largest, alarmed
+
+
+@pytest.mark.parametrize('seed', [11, 12])
+@pytest.mark.parametrize('stretch_windows', [1, 40])
+@pytest.mark.parametrize('side', [0.95, -0.95])
+def test_an_oil_within_its_band_moves_no_causes_sum_however_long_each_direction_lasts(
+        stretch_windows, side, seed):
+    # The band is taken off every cause's change whole, in every window. Taken off each
+    # cause only along its signature over the isolation's memory (stop 47's prototype), an
+    # offset's or a gain's, which reverse with the direction, would keep their sensitivity
+    # where the oil is constant, but within one direction they move with the oil as the
+    # friction does: on 10 s stretches an oil at 0.9 of this band drove the offset's sum to
+    # 1.96 N m s and the torque gain's to 6.0 (WARN at 0.6). The CUSUM reacts in seconds;
+    # the signatures part over the cycle.
+    mon, largest, alarmed = _directions(WIDE, side, stretch_windows, seed)
+    assert not mon.learning and not alarmed
+    assert np.all(largest < 0.5 * mon.settings.cusum_warn_nm_s)
+    # the same oil colder without the band alarms (warmer, the baseline follows it thinning)
+    assert _directions(None, side, stretch_windows, seed)[2] == (side > 0.0)
+
+
 @pytest.mark.parametrize('seed', [4, 5])
 def test_the_band_is_the_installations_friction_level_times_the_models(seed):
     # a pump whose valve plate is twice the model's (its oil colder than the one assumed):
