@@ -69,8 +69,8 @@ def test_allowance_interpolates_along_speed_and_holds_beyond_the_axis():
     assert oil.window_nm(1e4) == pytest.approx(0.08)
 
 
-def _monitor(oil):
-    config = EstimatorConfig()
+def _monitor(oil, **config_overrides):
+    config = EstimatorConfig(**config_overrides)
     return WearMonitor(settings_view(config, MonitorSettings),
                        settings_view(config, AttributionSettings), 0.0, True, 0.0, oil)
 

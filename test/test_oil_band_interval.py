@@ -86,7 +86,9 @@ def _wear_in_other_oil(oil, delta, offset, seed, windows=3000):
     monitor.
     """
     rng = np.random.default_rng(seed)
-    mon = _monitor(oil)
+    # the synthetic pump has the model's shapes, its levels learnt without systematic error:
+    # no floor on them, so that the oil's part of the interval is seen alone
+    mon = _monitor(oil, level_systematic_std=0.0)
     t, n = 0.0, WINDOW_SAMPLES
     for _ in range(windows):
         speed, vp, other, sign, th, h = oil_window(rng)

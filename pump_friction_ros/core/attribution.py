@@ -116,6 +116,7 @@ class AttributionSettings:
     isolation_memory_s: float
     isolation_episode_lack_of_fit: float
     scale_systematic_std: float
+    level_systematic_std: float
 
 
 def _evidence(stats: ChangeStats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -352,7 +353,8 @@ class FaultIsolation:
         * the cause the verdict names, once the change is confirmed (WARN or ERROR): its
           change (`friction_change`: a torque-constant drift too small to be learnt fitted
           with it) +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
-          level, the floor ``scale_systematic_std``); where the change still moves (the
+          level, at least ``level_systematic_std`` of it, the floor
+          ``scale_systematic_std``); where the change still moves (the
           slope of a line through it over the memory is significant at ``attribution_z``)
           the span reaches the line's present value too: a wear still growing is larger
           now than the memory's mean;
@@ -410,7 +412,9 @@ class FaultIsolation:
                 out += [1.0, with_unseen_level(-half, half, u)[1] / Z95]
                 continue
             # the baseline's uncertainty of the friction level, relative to it
-            level_rel_std = float(level_std[i]) / max(1.0 + float(coef[i]), MIN_LEVEL)
+            level_rel_std = math.hypot(float(level_std[i]) / max(1.0 + float(coef[i]),
+                                                                  MIN_LEVEL),
+                                       self.settings.level_systematic_std)
             change = delta if delta == delta else 0.0
             low, high = interval(change, noise * noise + floor * floor, level_rel_std)
             oil, oil_now = self.stats.oil_bias(i)
