@@ -17,7 +17,7 @@
 import math
 
 import numpy as np
-from pump_friction_ros.core.attribution import AttributionSettings, Verdict
+from pump_friction_ros.core.attribution import AttributionSettings, CAUSES, Verdict
 from pump_friction_ros.core.baseline import baseline_regressors
 from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
@@ -134,7 +134,7 @@ WIDE = OilAllowance([0.0, 1000.0], [0.0, 0.4])
 
 def _directions(oil, side, stretch_windows, seed, windows=1200):
     """
-    Run the tests' pump with each direction held for ``stretch_windows`` windows (0.25 s).
+    Run the tests' pump with each direction held for ``stretch_windows`` windows (of 0.25 s).
 
     From 60 s of running on, the oil sits at ``side`` times the WIDE band's change (> 0:
     colder). Returns the monitor, the largest CUSUM of each cause over the run [N m s], and
@@ -143,7 +143,7 @@ def _directions(oil, side, stretch_windows, seed, windows=1200):
     rng = np.random.default_rng(seed)
     mon = _monitor(oil)
     t, alarmed, n = 0.0, False, WINDOW_SAMPLES
-    largest = np.zeros(6)
+    largest = np.zeros(len(CAUSES))
     for w in range(windows):
         speed, vp, other, _, th, _ = oil_window(rng)
         sign = 1.0 if (w // stretch_windows) % 2 == 0 else -1.0
@@ -161,7 +161,7 @@ def _directions(oil, side, stretch_windows, seed, windows=1200):
 
 @pytest.mark.parametrize('seed', [11, 12])
 @pytest.mark.parametrize('stretch_windows', [1, 40])
-@pytest.mark.parametrize('side', [0.95, -0.95])
+@pytest.mark.parametrize('side', [0.9, -0.9])
 def test_an_oil_within_its_band_moves_no_causes_sum_however_long_each_direction_lasts(
         stretch_windows, side, seed):
     # The band is taken off every cause's change whole, in every window. Taken off each
@@ -173,7 +173,7 @@ def test_an_oil_within_its_band_moves_no_causes_sum_however_long_each_direction_
     # the signatures part over the cycle.
     mon, largest, alarmed = _directions(WIDE, side, stretch_windows, seed)
     assert not mon.learning and not alarmed
-    assert np.all(largest < 0.5 * mon.settings.cusum_warn_nm_s)
+    assert np.all(largest < 0.05 * mon.settings.cusum_warn_nm_s)  # (measured: <= 0.001)
     # the same oil colder without the band alarms (warmer, the baseline follows it thinning)
     assert _directions(None, side, stretch_windows, seed)[2] == (side > 0.0)
 

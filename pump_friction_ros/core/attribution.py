@@ -47,7 +47,9 @@ viscosity" and "other friction or oil viscosity"; with the temperature topic the
 follows the viscosity and they do not.
 
 The relative change delta_j = sum s_j d / sum s_j^2 is reported with its standard
-deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l and a floor
+deviation (1 / sqrt(sum s_j^2 w)), the baseline's uncertainty in l (its relative std in
+quadrature with ``level_systematic_std``: the pump is not its model, and the friction levels
+commissioning learnt carry that error, times the change) and a floor
 ``scale_systematic_std``: systematic model error does not average away with more windows.
 A friction cause's change is fitted together with a torque-constant drift too small to have
 been learnt (``drift_nuisance``), where the temperature topic makes one possible. Which
@@ -139,7 +141,8 @@ class FaultIsolation:
     ----------
     settings : AttributionSettings
         ``attribution_z``, ``identifiability_correlation``, ``isolation_memory_s``,
-        ``isolation_episode_lack_of_fit``, ``scale_systematic_std``.
+        ``isolation_episode_lack_of_fit``, ``scale_systematic_std``,
+        ``level_systematic_std``.
     viscosity_assumed : bool
         The viscosity is a parameter (no temperature topic): a friction change may be the
         oil's.
@@ -352,9 +355,9 @@ class FaultIsolation:
 
         * the cause the verdict names, once the change is confirmed (WARN or ERROR): its
           change (`friction_change`: a torque-constant drift too small to be learnt fitted
-          with it) +- 1.96 std (noise and lack of fit, the baseline's uncertainty of the
-          level, at least ``level_systematic_std`` of it, the floor
-          ``scale_systematic_std``); where the change still moves (the
+          with it) +- 1.96 std (noise and lack of fit; the baseline's uncertainty of the
+          level, its relative std in quadrature with ``level_systematic_std``, times the
+          change; the floor ``scale_systematic_std``); where the change still moves (the
           slope of a line through it over the memory is significant at ``attribution_z``)
           the span reaches the line's present value too: a wear still growing is larger
           now than the memory's mean;
@@ -412,8 +415,8 @@ class FaultIsolation:
                 out += [1.0, with_unseen_level(-half, half, u)[1] / Z95]
                 continue
             # the baseline's uncertainty of the friction level, relative to it
-            level_rel_std = math.hypot(float(level_std[i]) / max(1.0 + float(coef[i]),
-                                                                  MIN_LEVEL),
+            level = max(1.0 + float(coef[i]), MIN_LEVEL)
+            level_rel_std = math.hypot(float(level_std[i]) / level,
                                        self.settings.level_systematic_std)
             change = delta if delta == delta else 0.0
             low, high = interval(change, noise * noise + floor * floor, level_rel_std)

@@ -261,11 +261,12 @@ class EstimatorConfig:
         0.05, 'Floor of the standard deviation of a reported friction scale: model error '
         'that does not average away [-].', 0.0, 10.0)
     level_systematic_std: float = _param(
-        0.15, 'Floor of the relative standard deviation of the healthy friction levels the '
-        'baseline learnt: the pump is not its model, and where the shapes of the valve plate '
-        'and of the other friction are nearly collinear, their split moves with the error of '
-        'those shapes; a change relative to the level carries it (docs/monitor.md) [-].',
-        0.0, 10.0)
+        0.15, 'Relative standard deviation of the healthy friction levels the baseline '
+        'learnt from model error, added in quadrature to the std of the fit: the pump is not its '
+        'model, and where the shapes of the valve plate and of the other friction are nearly '
+        'collinear, their split moves with the error of those shapes; the interval of a '
+        'change relative to the level carries it, times the change (docs/monitor.md) [-].',
+        0.0, 1.0)
     stale_timeout_s: float = _param(0.5, 'No estimate for this long: diagnostics STALE [s].',
                                     1e-3, 3600.0)
     output_decimation: int = _param(10, 'Publish every N-th estimate (1 kHz in, 100 Hz out '
