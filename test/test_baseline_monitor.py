@@ -177,7 +177,9 @@ def test_collinear_signatures_cannot_be_told_apart_and_the_verdict_says_which(as
 
 
 def test_the_interval_without_a_change_spans_the_changes_the_cusum_does_not_see():
-    mon = monitor(cusum_drift_nm=0.06)  # an allowance that hides more than the floor
+    # an allowance that hides more than the floor; the pump has the model's shapes, its
+    # levels learnt without model error (`test_level_systematic` pins that floor)
+    mon = monitor(cusum_drift_nm=0.06, level_systematic_std=0.0)
     rng = np.random.default_rng(12)
     t = run(mon, rng, 240, TRUTH, noise=0.002)  # commissioning
     assert not mon.learning
@@ -283,7 +285,9 @@ def test_a_baseline_file_from_before_the_line_fit_loads_and_goes_on():
 
 
 def test_a_valve_plate_change_still_growing_is_reported_up_to_its_present_size():
-    mon = monitor()
+    # the pump has the model's shapes: its levels carry no model error
+    # (`test_level_systematic` pins that floor)
+    mon = monitor(level_systematic_std=0.0)
     rng = np.random.default_rng(13)
     t = run(mon, rng, 240, TRUTH)  # commissioning
     for k in range(800):  # wear growing steadily from x1 to x1.8 over 200 s of running
