@@ -18,15 +18,18 @@ import math
 
 import numpy as np
 from pump_friction_ros.core.attribution import Verdict
+from pump_friction_ros.core.friction_bias import Z95
 from pump_friction_ros.core.monitor import OK
 from pump_friction_ros.core.node_parameters import EstimatorConfig
 import pytest
 
 from .test_oil_allowance import _monitor, DT, WINDOW_SAMPLES
 
-Z95 = 1.959963984540054
 DELTA = 0.8
 """The valve plate's wear: x1.8 of its healthy friction."""
+SPEED_RAD_S = (50.0, 900.0)
+DP_BAR = (40.0, 220.0)
+"""The windows' operating points, each uniform over its range."""
 
 
 def _parts(speed_rad_s, dp_bar):
@@ -51,7 +54,7 @@ def _read_wear(factors, floor, seed, windows=1500):
     mon = _monitor(None, level_systematic_std=floor)
     t, n = 0.0, WINDOW_SAMPLES
     for _ in range(windows):
-        speed, dp = rng.uniform(50.0, 900.0), rng.uniform(40.0, 220.0)
+        speed, dp = rng.uniform(*SPEED_RAD_S), rng.uniform(*DP_BAR)
         sign = 1.0 if rng.random() < 0.5 else -1.0
         th = 0.01 * dp * (1.0 if rng.random() < 0.5 else -1.0)  # pumping or motoring
         model = _parts(speed, dp)
@@ -76,12 +79,13 @@ def test_a_pump_off_its_model_by_20_percent_a_term_learns_its_levels_off_beyond_
     # one scale per component cannot take each term's own factor: the split between the
     # valve plate and the other friction moves with them, far beyond the fit's own std
     errors = []
+    mean = _parts(np.mean(SPEED_RAD_S), np.mean(DP_BAR))[:2]  # the valve plate's terms
     for k, factors in enumerate(_pumps()):
         mon = _read_wear(factors, 0.0, 4 + k, windows=200)  # commissioning alone
         learnt = 1.0 + float(mon.baseline.coefficients[0])
-        # the valve plate's true level over the windows: its terms' factors, weighted
-        true = (factors[0] * 1.5e-3 * 130.0 + factors[1] * 3e-4 * 475.0) / (
-            1.5e-3 * 130.0 + 3e-4 * 475.0)
+        # the valve plate's true level over the windows: its terms' factors, weighted (both
+        # terms linear in the operating point: their means' weights)
+        true = float(factors[:2] @ mean / mean.sum())
         errors.append(abs(true / learnt - 1.0) / (float(mon.baseline.std()[0]) / learnt))
     assert np.median(errors) > 3.0  # the fit's std would have held them within 2
 
