@@ -28,12 +28,23 @@ from pump_friction_ros.evaluation.bank import (
     MonitorReading,
     valve_plate_truth,
 )
-from pump_friction_ros.evaluation.closed_loop import Plant, Setpoints, simulate_closed_loop
+from pump_friction_ros.evaluation.closed_loop import (
+    make_setpoints,
+    Plant,
+    Setpoints,
+    simulate_closed_loop,
+)
 from pump_friction_ros.evaluation.eha_scenarios import draw_eha, eha_estimator_config, fault_factor
 from pump_friction_ros.evaluation.eha_settings import SensorSettings
 from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario, SimulatedScenario
 from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
-from pump_friction_ros.evaluation.settings import FAMILIES, FAULTS, FULL, QUICK
+from pump_friction_ros.evaluation.settings import (
+    FAMILIES,
+    FAULTS,
+    FULL,
+    HELD_OUT_FAMILIES,
+    QUICK,
+)
 from pump_friction_ros.evaluation.true_pump import PumpVariant, true_table
 from pump_friction_ros.evaluation.truths import (
     commissioned_factor,
@@ -274,6 +285,50 @@ def test_bank_sizes_of_the_realistic_families():
     assert len(quick) <= 8 and all(s.duration_s <= 180.0 for s in quick)
     classic = [s for s in build_scenarios(FULL) if not s.family.realistic]
     assert all(s.fault.scope in ('classic', 'all') for s in classic)
+
+
+def test_the_held_out_families_run_apart_at_the_banks_size():
+    held = [f.name for f in HELD_OUT_FAMILIES]
+    assert all(f.realistic for f in HELD_OUT_FAMILIES)
+    assert not set(held) & {f.name for f in FAMILIES}
+    assert not any(s.family.name in held for s in build_scenarios(FULL))
+    runs = build_scenarios(replace(FULL, held_out=True))
+    assert {s.family.name for s in runs} == set(held)
+    assert sum(s.duration_s for s in runs if s.fault.name == 'nominal') / 3600.0 >= 10.0
+    for family in held:
+        for fault in (f.name for f in FAULTS if f.scope == 'eha'):
+            same = [s for s in runs if s.family.name == family and s.fault.name == fault]
+            assert len(same) == 3 and all(1800.0 <= s.onset_s <= 1860.0 for s in same)
+
+
+def test_the_held_out_duty_cycles_are_what_their_names_say():
+    held = {f.name: f for f in HELD_OUT_FAMILIES}
+    p = plant()
+    max_step_m = p.metres_per_rad * p.max_speed_rad_s * p.step_s  # a ramp at the loop's top
+
+    def setpoints(family):  # 200 s of setpoints
+        return make_setpoints(family.motion.setpoints, p, 2_000_000, np.random.default_rng(3))
+
+    def travel_per_move(family):  # [stroke]
+        sp = setpoints(family)
+        return np.abs(np.diff(sp.position_m)).sum() / sp.moves / p.stroke_m
+
+    # ramps only: no setpoint jump; the bank's steps jump by up to 15 % of the stroke
+    assert np.abs(np.diff(setpoints(held['eha_ramps_temp']).position_m)).max() <= max_step_m
+    assert np.abs(np.diff(setpoints(FAMILY['eha_steps_no_temp']).position_m)).max() > \
+        100.0 * max_step_m
+    # jerky: half its moves small corrections, against a fifth on the bank's steps
+    assert travel_per_move(held['eha_jerky_temp']) < 0.8 * travel_per_move(
+        FAMILY['eha_steps_no_temp'])
+    # long dwells: fewer moves than pick and place with its dwells of 0.3-3 s
+    assert setpoints(held['eha_long_dwell']).moves < 0.5 * setpoints(
+        FAMILY['eha_pick_place']).moves
+    # a thermostat oil without topic: no swing, the node told one viscosity
+    for rep in range(5):
+        scen = Scenario(held['eha_pnp_nt_thermo'], FAULT['nominal'], rep, 30.0, math.inf,
+                        10.0, 0, CONFIG)
+        assert draw_eha(scen).temperature_swing_c == 0.0
+        assert eha_estimator_config(scen).viscosity_source == 'parameter'
 
 
 def test_the_intermittent_truth_is_the_factor_the_isolation_memory_holds():

@@ -62,6 +62,7 @@ from pump_friction_ros.evaluation.settings import (
     FAMILIES,
     Fault,
     FAULTS,
+    HELD_OUT_FAMILIES,
     QUICK,
 )
 from pump_friction_ros.physics.model import COMPONENTS
@@ -468,6 +469,25 @@ def test_the_out_folder_is_written_whole_and_replaced_only_with_force(quick, tmp
     (out / 'table.md').write_text('older\n')
     assert main(['evaluate-monitor', '--quiet', '--out', str(out), '--force']) == 0
     assert (out / 'table.md').read_text() == table
+
+
+def test_held_out_runs_the_held_out_families_and_no_other(tmp_path, capsys):
+    out = tmp_path / 'held_out'
+    assert main(['evaluate-monitor', '--quick', '--held-out', '--workers', '1', '--quiet',
+                 '--out', str(out)]) == 0
+    printed = capsys.readouterr().out
+    with (out / 'records.csv').open() as handle:
+        families = {row['family'] for row in csv.DictReader(handle)}
+    assert families == {f.name for f in HELD_OUT_FAMILIES}
+    columns = {cell.strip() for cell in printed.splitlines()[0].split('|')}
+    assert {f.label for f in HELD_OUT_FAMILIES} <= columns
+    assert not columns & {f.label for f in FAMILIES}
+
+
+def test_held_out_and_next_morning_are_one_usage_error(capsys):
+    assert main(['evaluate-monitor', '--held-out', '--next-morning']) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'not allowed with' in err
 
 
 def test_the_bank_imports_no_ros():

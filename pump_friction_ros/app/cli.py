@@ -410,8 +410,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="replace an existing --out folder of this command's outputs")
     p.add_argument('--seed', type=SEED, default=0, metavar='N', help='bank seed (default 0)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
-    p.add_argument('--next-morning', action='store_true', help='instead: the cold starts '
-                   "without temperature topic again a day later, from the first day's state")
+    instead = p.add_mutually_exclusive_group()
+    instead.add_argument('--next-morning', action='store_true', help='instead: the cold '
+                         'starts without temperature topic again a day later, from the first '
+                         "day's state")
+    instead.add_argument('--held-out', action='store_true', help='instead of the families: '
+                         'the realistic duty cycles held out of the bank (ramps, jerky moves, '
+                         'long dwells, a thermostat oil without topic), none used to set a '
+                         'number')
     p.set_defaults(func=data_commands.cmd_evaluate_monitor)
 
     p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")

@@ -165,4 +165,5 @@ def cmd_evaluate_monitor(args: argparse.Namespace) -> int:
 
     return evaluate_monitor(quick=args.quick, workers=args.workers, out=args.out,
                             seed=args.seed, progress=not args.quiet,
-                            next_morning=args.next_morning, force=args.force)
+                            next_morning=args.next_morning, force=args.force,
+                            held_out=args.held_out)

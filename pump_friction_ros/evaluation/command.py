@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from .bank import run_bank
@@ -55,12 +56,14 @@ def looks_like_evaluation(path: Path) -> bool:
 
 def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | None = None,
                      seed: int = 0, progress: bool = True, next_morning: bool = False,
-                     force: bool = False) -> int:
+                     force: bool = False, held_out: bool = False) -> int:
     """
     Run the evaluation bank with the current monitor and print one table.
 
     With ``next_morning``, instead: each installation of the cold start without temperature
     topic, a second day from the first's state (``next_morning``), with and without the hold.
+    With ``held_out``, the realistic duty cycles held out of the bank
+    (`settings.HELD_OUT_FAMILIES`) instead of its families, at the same size.
 
     Parameters
     ----------
@@ -83,6 +86,8 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     force : bool
         Replace an existing ``out`` folder that holds only an earlier evaluation's outputs
         (its ``next_morning.md`` too), or with ``next_morning`` that file.
+    held_out : bool
+        Run the held-out families instead of the bank's (not with ``next_morning``).
 
     Returns
     -------
@@ -93,9 +98,14 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     ------
     OutputError
         ``out`` exists (without ``force``), is not such a folder, or cannot be made.
+    ValueError
+        ``held_out`` with ``next_morning`` (the next mornings are the bank's cold starts).
 
     """
-    settings = QUICK if quick else FULL
+    if held_out and next_morning:
+        raise ValueError('held_out and next_morning exclude each other: the next mornings '
+                         "are the bank's cold starts without temperature topic")
+    settings = replace(QUICK if quick else FULL, held_out=held_out)
     outputs = StagedOutputs()
     try:
         if next_morning:  # one file, beside a bank's outputs in the same folder if any

@@ -51,7 +51,7 @@ from typing import Any
 
 from .bank import RunRecord
 from .report import nearest_rank, table_order
-from .settings import ACCEPTED_ATTRIBUTIONS, FAMILIES, FAULTS, FLOORS
+from .settings import ACCEPTED_ATTRIBUTIONS, ALL_FAMILIES, FAULTS, FLOORS
 
 __all__ = ['floor_figures', 'format_floors', 'in_scope', 'reference_delay_s', 'scope_reason']
 
@@ -146,7 +146,7 @@ def floor_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
 
     """
     faults = [r for r in records if r.truth_class != 'nominal']
-    families = table_order({r.family for r in faults}, [f.name for f in FAMILIES])
+    families = table_order({r.family for r in faults}, [f.name for f in ALL_FAMILIES])
     names = table_order({r.fault for r in faults}, [f.name for f in FAULTS])
     out: dict[str, Any] = {'faults': {}, 'classes': {}, 'families': ['all', *families]}
     for name in names:
@@ -228,7 +228,7 @@ def format_floors(floors: dict[str, Any]) -> str:
     table = floors['faults']
     if not table:
         return ''
-    labels = {f.name: f.label for f in FAMILIES}
+    labels = {f.name: f.label for f in ALL_FAMILIES}
     families = floors['families']
     head = ['fault', 'floor on the runs in scope', *(labels.get(f, f) for f in families)]
     rows = []

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .bank import RunRecord
-from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
+from .settings import ACCEPTED_ATTRIBUTIONS, ALL_FAMILIES, ATTRIBUTIONS, FAULTS
 from ..plotting import pyplot
 
 __all__ = ['write_bank_plots']
@@ -75,8 +75,10 @@ def _delay_figure(plt, records: Sequence[RunRecord], figures: dict[str, Any]):
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True,
                                       gridspec_kw={'width_ratios': [1, 1.4]})
     colours = plt.get_cmap('tab10')
-    for k, family in enumerate(FAMILIES):
-        shift = (k - (len(FAMILIES) - 1) / 2) * _JITTER
+    present = {r.family for r in records}
+    families = [f for f in ALL_FAMILIES if f.name in present]  # the bank's or the held-out
+    for k, family in enumerate(families):
+        shift = (k - (len(families) - 1) / 2) * _JITTER
         for ax, names, position in ((left, steps, lambda n: _FAULT[n].size),
                                     (right, others, others.index)):
             runs = [r for r in faulty if r.family == family.name and r.fault in names]

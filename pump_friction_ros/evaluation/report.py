@@ -45,7 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from .bank import BankResult, RunRecord
-from .settings import ACCEPTED_ATTRIBUTIONS, ATTRIBUTIONS, FAMILIES, FAULTS
+from .settings import ACCEPTED_ATTRIBUTIONS, ALL_FAMILIES, ATTRIBUTIONS, FAULTS
 from ..core.friction_bias import Z95  # the monitor's: its intervals are judged by their own
 
 __all__ = ['bank_figures', 'covers', 'format_table', 'nearest_rank', 'write_outputs']
@@ -195,7 +195,7 @@ def bank_figures(records: Sequence[RunRecord]) -> dict[str, Any]:
 
     """
     records = list(records)
-    families = table_order((r.family for r in records), [f.name for f in FAMILIES])
+    families = table_order((r.family for r in records), [f.name for f in ALL_FAMILIES])
     faults = table_order((r.fault for r in records), [f.name for f in FAULTS])
     classes = table_order((r.truth_class for r in records), list(ACCEPTED_ATTRIBUTIONS))
     nominal = _alarm_figures(records, families, nominal=True)
@@ -310,7 +310,7 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
 
     """
     families = [f for f in figures['false_alarms_per_hour'] if f != 'all']
-    labels = {f.name: f.label for f in FAMILIES}
+    labels = {f.name: f.label for f in ALL_FAMILIES}
     head = ['case', 'runs', 'all', *(labels.get(f, f) for f in families),
             *(_ATTRIBUTION_HEAD[a] for a in ATTRIBUTIONS), 'vp err', 'vp abs err p90',
             'other err', 'cov vp', 'cov other']

@@ -15,7 +15,8 @@
 """
 Every number of the monitor evaluation bank, in one place, with its meaning.
 
-Duty-cycle families (`FAMILIES`), faults (`FAULTS`), sensor and load settings
+Duty-cycle families (`FAMILIES`; `HELD_OUT_FAMILIES`, run apart), faults (`FAULTS`), sensor
+and load settings
 (`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges ``(low, high)`` are
 drawn uniformly per scenario from its seed. The plant constants that the estimator of the
 classic families must share with the truth (rotor inertia, nominal drive loss, oil viscosity
@@ -35,11 +36,13 @@ from .eha_settings import EhaSettings, SetpointSettings, TemperatureSettings
 
 __all__ = [
     'ACCEPTED_ATTRIBUTIONS',
+    'ALL_FAMILIES',
     'ATTRIBUTIONS',
     'FAMILIES',
     'FAULTS',
     'FLOORS',
     'FULL',
+    'HELD_OUT_FAMILIES',
     'QUICK',
     'BankSettings',
     'CreepSettings',
@@ -249,6 +252,27 @@ FAMILIES: tuple[Family, ...] = (
 )
 """The duty-cycle families, in table order: the classic ones, then the realistic EHAs."""
 
+HELD_OUT_FAMILIES: tuple[Family, ...] = (
+    Family('eha_ramps_temp', 'eha ramps', EhaSettings(SetpointSettings(step_probability=0.0))),
+    Family('eha_jerky_temp', 'eha jerky', EhaSettings(SetpointSettings(
+        step_probability=0.7, small_move_probability=0.5))),
+    Family('eha_long_dwell', 'eha dwell', EhaSettings(SetpointSettings(
+        pick_place=True, dwell_s=(3.0, 12.0)))),
+    Family('eha_pnp_nt_thermo', 'eha pnp nt thermo', EhaSettings(
+        SetpointSettings(pick_place=True), TemperatureSettings(topic=False, swing_c=(0.0, 0.0)))),
+)
+"""
+Realistic duty cycles held out of the bank (``evaluate-monitor --held-out``): no number of
+the monitor was set on them. With the temperature topic: ramps only, no setpoint steps;
+jerky, 70 % steps and half the moves small corrections (reversals, little steady running);
+pick and place with dwells of 3-12 s under pressure (a few % of the time monitored).
+Without it: pick and place on an oil held by a thermostat (no swing). Everything else is
+drawn as for `FAMILIES`' realistic ones.
+"""
+
+ALL_FAMILIES: tuple[Family, ...] = FAMILIES + HELD_OUT_FAMILIES
+"""Every family, in table order (a bank's records name one of these)."""
+
 ATTRIBUTIONS = ('valve_plate', 'other_friction', 'not_friction', 'cannot_tell', 'none')
 """Possible attributions of a monitor reading ('none': no alarm), in table order."""
 
@@ -401,6 +425,8 @@ class BankSettings:
     """The fault starts at this fraction of the run [-]."""
     families: tuple[str, ...] | None = None
     """Only these families (None: all)."""
+    held_out: bool = False
+    """Run `HELD_OUT_FAMILIES` instead of `FAMILIES` (``families`` then picks among them)."""
     faults: tuple[str, ...] | None = None
     """Only these faults (None: all)."""
     eha: EhaBankSettings | None = None
