@@ -479,15 +479,20 @@ def test_held_out_runs_the_held_out_families_and_no_other(tmp_path, capsys):
     with (out / 'records.csv').open() as handle:
         families = {row['family'] for row in csv.DictReader(handle)}
     assert families == {f.name for f in HELD_OUT_FAMILIES}
+    assert "Bank 'quick', held-out families, seed 0" in printed
     columns = {cell.strip() for cell in printed.splitlines()[0].split('|')}
     assert {f.label for f in HELD_OUT_FAMILIES} <= columns
     assert not columns & {f.label for f in FAMILIES}
 
 
-def test_held_out_and_next_morning_are_one_usage_error(capsys):
+def test_held_out_and_next_morning_are_one_usage_error(capsys, monkeypatch):
+    monkeypatch.setattr(command_module, 'run_bank', _bank_must_not_run)
+    monkeypatch.setattr(command_module, 'run_next_mornings', _bank_must_not_run)
     assert main(['evaluate-monitor', '--held-out', '--next-morning']) == 2
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and 'not allowed with' in err
+    with pytest.raises(ValueError, match='exclude each other'):  # the API, as the CLI
+        command_module.evaluate_monitor(held_out=True, next_morning=True)
 
 
 def test_the_bank_imports_no_ros():

@@ -24,8 +24,9 @@ May import: sim, core, table, physics, base.
 
 from .bank import BankResult, MonitorReading, read_monitor, run_bank, RunRecord
 from .report import bank_figures, format_table
-from .settings import BankSettings, FAMILIES, FAULTS, FULL, QUICK
+from .settings import ALL_FAMILIES, BankSettings, FAMILIES, FAULTS, FULL, HELD_OUT_FAMILIES, QUICK
 
-__all__ = ['FAMILIES', 'FAULTS', 'FULL', 'QUICK', 'BankResult', 'BankSettings',
+__all__ = ['ALL_FAMILIES', 'FAMILIES', 'FAULTS', 'FULL', 'HELD_OUT_FAMILIES', 'QUICK',
+           'BankResult', 'BankSettings',
            'MonitorReading', 'RunRecord', 'bank_figures', 'format_table', 'read_monitor',
            'run_bank']

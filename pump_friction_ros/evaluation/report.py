@@ -384,7 +384,9 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')
     out += ['', legend]
     if result is not None:
-        out.append(f'Bank {result.settings.name!r}, seed {result.seed}: {figures["runs"]} runs,'
+        held = ', held-out families' if result.settings.held_out else ''
+        out.append(f'Bank {result.settings.name!r}{held}, seed {result.seed}: '
+                   f'{figures["runs"]} runs,'
                    f' {figures["simulated_hours"]:.2f} h simulated '
                    f'({figures["nominal_hours"]["all"]:.2f} h nominal), '
                    f'{result.runtime_s:.0f} s on {result.workers} worker(s) '

@@ -15,7 +15,7 @@
 """
 Scenarios of the monitor evaluation bank: duty cycle, fault and noise, vectorised.
 
-A scenario is a duty-cycle family (`settings.FAMILIES`), a fault (`settings.FAULTS`) with
+A scenario is a duty-cycle family (`settings.ALL_FAMILIES`), a fault (`settings.FAULTS`) with
 its onset, and a seed. `simulate_scenario` draws the family's random parameters from the
 seed and makes the signals the node would receive, as ``simulate.simulate_duty_cycle``
 does: the true speed and acceleration (closed forms), a load pressure that follows a

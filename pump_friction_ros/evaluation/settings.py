@@ -16,12 +16,12 @@
 Every number of the monitor evaluation bank, in one place, with its meaning.
 
 Duty-cycle families (`FAMILIES`; `HELD_OUT_FAMILIES`, run apart), faults (`FAULTS`), sensor
-and load settings
-(`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges ``(low, high)`` are
-drawn uniformly per scenario from its seed. The plant constants that the estimator of the
-classic families must share with the truth (rotor inertia, nominal drive loss, oil viscosity
-and its 40 / 100 degC law) are not here: they come from the package's node parameters
-(``config/torque_estimator.yaml``), so that the estimator is configured as the truth is.
+and load settings (`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges
+``(low, high)`` are drawn uniformly per scenario from its seed. The plant constants that the
+estimator of the classic families must share with the truth (rotor inertia, nominal drive
+loss, oil viscosity and its 40 / 100 degC law) are not here: they come from the package's
+node parameters (``config/torque_estimator.yaml``), so that the estimator is configured as
+the truth is.
 
 The realistic families (position-controlled EHAs with real sensors, oils, cold starts and a
 true pump that is not the node's model) have their numbers in ``eha_settings``; their
@@ -264,8 +264,9 @@ HELD_OUT_FAMILIES: tuple[Family, ...] = (
 """
 Realistic duty cycles held out of the bank (``evaluate-monitor --held-out``): no number of
 the monitor was set on them. With the temperature topic: ramps only, no setpoint steps;
-jerky, 70 % steps and half the moves small corrections (reversals, little steady running);
-pick and place with dwells of 3-12 s under pressure (a few % of the time monitored).
+jerky, 70 % of the moves steps and, drawn apart, half of all moves small corrections
+(reversals, little steady running); pick and place with dwells of 3-12 s under pressure (a
+few % of the time monitored).
 Without it: pick and place on an oil held by a thermostat (no swing). Everything else is
 drawn as for `FAMILIES`' realistic ones.
 """
