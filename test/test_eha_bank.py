@@ -192,6 +192,30 @@ def test_measured_torque_is_gain_times_the_delivered_torque_plus_offset():
     assert config.drive_loss_torque_nm == d.drive_loss_nm
 
 
+@pytest.mark.parametrize('name', [f.name for f in FAULTS if f.scope == 'held_out'])
+def test_a_held_out_fault_changes_the_measured_signals_by_its_closed_form(name):
+    fault = FAULT[name]
+    scen = scenario('eha_pick_place', name)
+    sim = simulate_scenario(scen, cached_table(load_pump(None)))
+    d = draw_eha(scen)
+    truth = true_table(d.variant).lookup_array(sim.true_speed_rad_s, sim.true_pressure_diff_pa,
+                                               sim.true_viscosity_m2_s)
+    after = sim.t_s >= 20.0
+    friction = sum(truth[f'{c}_nm'] * np.where(after, fault.factors[c], 1.0)
+                   for c in COMPONENTS)
+    v_g = load_pump(None).geometry.displacement_m3
+    delivered = v_g * sim.true_pressure_diff_pa / (2 * math.pi) + friction + \
+        d.rotor_inertia_kg_m2 * sim.true_accel_rad_s2 + \
+        (d.drive_loss_nm + fault.drive_loss_nm * after) * np.tanh(sim.true_speed_rad_s / 2.0)
+    np.testing.assert_allclose(sim.torque_nm, 1.02 * delivered + 0.01 +
+                               fault.torque_offset_nm * after, rtol=1e-9, atol=1e-9)
+    # the pressure sensor (no offset, no noise here) reads the gain times the true one
+    gain = np.where(sim.pressure_t_s >= 20.0, fault.pressure_gain, 1.0)
+    np.testing.assert_allclose(sim.pressure_diff_pa, gain * np.interp(
+        sim.pressure_t_s, sim.t_s, sim.true_pressure_diff_pa), rtol=1e-9, atol=1e-6)
+    assert sim.fault_running_nm > 0.0 and sim.vp_truth == 1.0
+
+
 def test_encoder_speed_is_quantised_and_keeps_the_angle():
     t = np.arange(5000) * 1e-3
     angle = 37.0 * t + 0.2 * np.sin(3.0 * t)
@@ -287,23 +311,30 @@ def test_bank_sizes_of_the_realistic_families():
     assert all(s.fault.scope in ('classic', 'all') for s in classic)
 
 
-def test_the_held_out_families_run_apart_at_the_banks_size():
+def test_the_held_out_bank_runs_what_the_bank_holds_out_at_its_size():
     held = [f.name for f in HELD_OUT_FAMILIES]
+    realistic = [f.name for f in FAMILIES if f.realistic]
+    held_faults = [f.name for f in FAULTS if f.scope == 'held_out']
     assert all(f.realistic for f in HELD_OUT_FAMILIES)
-    assert not set(held) & {f.name for f in FAMILIES}
+    assert not set(held) & {f.name for f in FAMILIES} and len(held_faults) == 5
     bank = build_scenarios(FULL)
-    assert not any(s.family.name in held for s in bank)
+    assert not any(s.family.name in held or s.fault.name in held_faults for s in bank)
     runs = build_scenarios(replace(FULL, held_out=True))
-    assert {s.family.name for s in runs} == set(held)
 
-    def size(scenarios, family):  # per fault: runs, their lengths and onset range
-        return {fault.name: sorted((s.duration_s, 1800.0 <= s.onset_s <= 1860.0 or
-                                    s.onset_s == math.inf) for s in scenarios
-                                   if s.family.name == family and s.fault is fault)
-                for fault in FAULTS if fault.scope in ('eha', 'all')}
+    def size(scenarios, family, faults):  # per fault: run lengths, onsets in range
+        return {fault: sorted((s.duration_s, 1800.0 <= s.onset_s <= 1860.0 or
+                               s.onset_s == math.inf) for s in scenarios
+                              if s.family.name == family and s.fault.name == fault)
+                for fault in faults}
 
-    for family in held:  # the size of each of the bank's realistic families
-        assert size(runs, family) == size(bank, 'eha_pick_place')
+    bank_faults = [f.name for f in FAULTS if f.scope in ('eha', 'all')]
+    for family in held:  # every realistic fault, as the bank runs pick and place
+        assert size(runs, family, bank_faults) == size(bank, 'eha_pick_place', bank_faults)
+    for family in held + realistic:  # the held-out faults on every realistic family
+        assert size(runs, family, held_faults) == {
+            fault: [(2700.0, True)] * 3 for fault in held_faults}
+    assert len(runs) == len(held) * (len(bank_faults) + len(held_faults)) * 3 + \
+        len(realistic) * len(held_faults) * 3  # nothing the bank runs
 
 
 def test_the_held_out_duty_cycles_are_what_their_names_say():

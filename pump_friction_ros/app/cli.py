@@ -414,10 +414,11 @@ def build_parser() -> argparse.ArgumentParser:
     instead.add_argument('--next-morning', action='store_true', help='instead: the cold '
                          'starts without temperature topic again a day later, from the first '
                          "day's state")
-    instead.add_argument('--held-out', action='store_true', help='instead of the families: '
-                         'the realistic duty cycles held out of the bank (ramps, jerky moves, '
-                         'long dwells, a thermostat oil without topic), none used to set a '
-                         'number')
+    instead.add_argument('--held-out', action='store_true', help='instead: what the bank '
+                         'holds out, no number set on it: four realistic duty cycles (ramps, '
+                         'jerky moves, long dwells, a thermostat oil without topic) with every '
+                         'realistic fault, and five faults (spherical joints, piston heads, '
+                         'pressure gain, torque offset, drive loss) on every realistic family')
     p.set_defaults(func=data_commands.cmd_evaluate_monitor)
 
     p = sub.add_parser('plot', help="PNG figures in the manner of the paper's")

@@ -39,7 +39,7 @@ from .bank_node import node_spec, node_table, pump_and_table, scenario_node, sim
 from .eha_scenarios import draw_eha
 from .eha_settings import EhaSettings
 from .scenarios import Scenario, SimulatedScenario
-from .settings import BankSettings, FAMILIES, Family, FAULTS, HELD_OUT_FAMILIES
+from .settings import ALL_FAMILIES, BankSettings, FAMILIES, Family, FAULTS
 from .true_pump import true_table
 from ..core.attribution import Verdict
 from ..core.estimator import TorqueEstimator
@@ -242,14 +242,14 @@ def build_scenarios(settings: BankSettings, seed: int = 0,
     """
     config = config or base_config()
     scenarios = []
-    for family in HELD_OUT_FAMILIES if settings.held_out else FAMILIES:
+    for family in ALL_FAMILIES if settings.held_out else FAMILIES:
         if settings.families is not None and family.name not in settings.families:
             continue
         size = _Size.of(settings, family)
         if size is None:
             continue
         for fault in FAULTS:
-            if not fault.applies_to(family) or any(
+            if not fault.applies_to(family, settings.held_out) or any(
                     names is not None and fault.name not in names
                     for names in (settings.faults, size.faults)):
                 continue

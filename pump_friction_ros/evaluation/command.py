@@ -62,8 +62,9 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
 
     With ``next_morning``, instead: each installation of the cold start without temperature
     topic, a second day from the first's state (``next_morning``), with and without the hold.
-    With ``held_out``, the realistic duty cycles held out of the bank
-    (`settings.HELD_OUT_FAMILIES`) instead of its families, at the same size.
+    With ``held_out``, what the bank holds out instead of the bank, at its size
+    (`settings.Fault.applies_to`): the held-out duty cycles (`settings.HELD_OUT_FAMILIES`)
+    with every realistic fault, and the held-out faults on every realistic family.
 
     Parameters
     ----------
@@ -87,7 +88,7 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
         Replace an existing ``out`` folder that holds only an earlier evaluation's outputs
         (its ``next_morning.md`` too), or with ``next_morning`` that file.
     held_out : bool
-        Run the held-out families instead of the bank's (not with ``next_morning``).
+        Run what the bank holds out instead of the bank (not with ``next_morning``).
 
     Returns
     -------

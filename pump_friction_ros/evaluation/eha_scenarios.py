@@ -23,10 +23,11 @@ loss) and keeps the shipped pump file and table; `simulate_eha` runs the closed 
 (``closed_loop``) and makes the motor torque
 
     T = V_g dp / (2 pi) + sum_c f_c(t) T_c,true(speed, dp, nu_true) + J a
-        + drive loss tanh(speed / w0),
+        + (drive loss + its fault's change from the onset) tanh(speed / w0),
 
 with T_c,true from the true pump's table (``true_pump``), then measures it and the other
-signals with real sensors (``sensors``). The valve-plate truth is the least-squares ratio
+signals with real sensors (``sensors``), a fault's torque-constant, offset or pressure-gain
+change included. The valve-plate truth is the least-squares ratio
 of the true valve-plate friction to the node's modelled one where the monitor learns, x
 the fault factor at the end: what a perfect monitor would report.
 """
@@ -196,7 +197,8 @@ def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp
     fault : Fault
         The fault (``ramp``, ``intermittent`` and the episode ranges).
     value : float
-        Its factor (friction factor or torque gain).
+        Its factor (friction factor, torque or pressure gain); 2 gives an additive fault's
+        share plus 1 (0 before the onset, 1 at full size).
     t : ndarray
         Times [s].
     onset_s : float
@@ -269,6 +271,9 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     direction = np.tanh(speed / table.zero_speed_threshold_rad_s)
     delivered = true['theoretical_nm'] + d.rotor_inertia_kg_m2 * run.accel_rad_s2 + \
         d.drive_loss_nm * direction
+    if fault.drive_loss_nm or fault.torque_offset_nm:  # additive: 0 before, 1 from the onset
+        came = fault_factor(fault, 2.0, t, onset, ramp, episodes) - 1.0
+        delivered += fault.drive_loss_nm * came * direction
     for c in COMPONENTS:
         delivered += factors[c] * true[f'{c}_nm']
     sens = d.sensors
@@ -278,6 +283,8 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
         temperature - s.sensors.torque_drift_reference_c)) * fault_factor(
         fault, fault.torque_gain, t, onset, ramp, episodes)
     torque = measured_torque(delivered, gain, sens.torque_offset_nm, sens.torque_noise_nm, rng)
+    if fault.torque_offset_nm:  # a change of the drive's current offset
+        torque += fault.torque_offset_nm * came
     measured_speed = encoder_speed(run.angle_rad, sens.encoder_counts_per_rev, dt,
                                    sens.encoder_offset_rad)
     # the truths the report needs, where the monitor learns (true speed and acceleration)
@@ -308,7 +315,8 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     windows = bursts(scenario.duration_s, sens.burst_rate_per_h, s.sensors.burst_length_s, rng)
     joint = message_indices(t, sens.drop_probability, sens.duplicate_probability, windows, rng)
     tp = np.arange(sens.pressure_phase_s, scenario.duration_s, 1.0 / sens.pressure_rate_hz)
-    dp_p = np.interp(tp, t, dp) + sens.pressure_offset_pa + \
+    dp_p = np.interp(tp, t, dp) * fault_factor(fault, fault.pressure_gain, tp, onset, ramp,
+                                               episodes) + sens.pressure_offset_pa + \
         rng.normal(0.0, sens.pressure_noise_pa, tp.size)
     press = message_indices(tp, sens.drop_probability, sens.duplicate_probability, windows,
                             rng)

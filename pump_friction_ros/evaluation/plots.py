@@ -71,7 +71,9 @@ def _delay_figure(plt, records: Sequence[RunRecord], figures: dict[str, Any]):
     top = 1.15 * max(finite, default=1.0)  # where the runs not detected are drawn
     steps = [f.name for f in FAULTS
              if f.truth_class == 'valve_plate' and not f.ramp and not f.intermittent]
-    others = [f.name for f in FAULTS if f.truth_class != 'nominal' and f.name not in steps]
+    run = {r.fault for r in faulty}  # a column per fault the bank ran (held out or not)
+    others = [f.name for f in FAULTS if f.truth_class != 'nominal' and f.name not in steps
+              and f.name in run]
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8), sharey=True,
                                       gridspec_kw={'width_ratios': [1, 1.4]})
     colours = plt.get_cmap('tab10')

@@ -15,13 +15,13 @@
 """
 Every number of the monitor evaluation bank, in one place, with its meaning.
 
-Duty-cycle families (`FAMILIES`; `HELD_OUT_FAMILIES`, run apart), faults (`FAULTS`), sensor
-and load settings (`SignalSettings`) and the size of the bank (`QUICK`, `FULL`). Ranges
-``(low, high)`` are drawn uniformly per scenario from its seed. The plant constants that the
-estimator of the classic families must share with the truth (rotor inertia, nominal drive
-loss, oil viscosity and its 40 / 100 degC law) are not here: they come from the package's
-node parameters (``config/torque_estimator.yaml``), so that the estimator is configured as
-the truth is.
+Duty-cycle families (`FAMILIES`; `HELD_OUT_FAMILIES`, run apart), faults (`FAULTS`, some
+held out: `Fault.scope`), sensor and load settings (`SignalSettings`) and the size of the
+bank (`QUICK`, `FULL`). Ranges ``(low, high)`` are drawn uniformly per scenario from its
+seed. The plant constants that the estimator of the classic families must share with the
+truth (rotor inertia, nominal drive loss, oil viscosity and its 40 / 100 degC law) are not
+here: they come from the package's node parameters (``config/torque_estimator.yaml``), so
+that the estimator is configured as the truth is.
 
 The realistic families (position-controlled EHAs with real sensors, oils, cold starts and a
 true pump that is not the node's model) have their numbers in ``eha_settings``; their
@@ -321,11 +321,32 @@ class Fault:
     episode_off_s: Range = (20.0, 180.0)
     """Length of an 'off' episode [s] (intermittent faults)."""
     scope: str = 'classic'
-    """The families the fault is run on: 'classic', 'eha' (the realistic ones) or 'all'."""
+    """The families the fault is run on: 'classic', 'eha' (the realistic ones), 'all', or
+    'held_out' (the realistic ones, only in a held-out bank)."""
 
-    def applies_to(self, family: Family) -> bool:
-        """Return whether the bank runs this fault on ``family``."""
-        return self.scope == 'all' or (self.scope == 'eha') == family.realistic
+    def applies_to(self, family: Family, held_out: bool = False) -> bool:
+        """
+        Return whether a bank runs this fault on ``family``.
+
+        Parameters
+        ----------
+        family : Family
+            A duty-cycle family.
+        held_out : bool
+            The held-out bank (`BankSettings.held_out`): what the default bank holds out,
+            every realistic fault on `HELD_OUT_FAMILIES` and the held-out faults on every
+            realistic family.
+
+        Returns
+        -------
+        bool
+            Whether the bank runs it.
+
+        """
+        if held_out:
+            return family.realistic and (self.scope == 'held_out' or (
+                self.scope in ('eha', 'all') and family in HELD_OUT_FAMILIES))
+        return self.scope == 'all' or self.scope == ('eha' if family.realistic else 'classic')
 
     @property
     def factors(self) -> dict[str, float]:
@@ -354,6 +375,14 @@ FAULTS: tuple[Fault, ...] = (
     Fault('bearing_x2.0', 'other_friction', 2.0, bearing=2.0, scope='eha'),
     Fault('torque_constant_-5%', 'measurement', 0.95, torque_gain=0.95, ramp=True,
           scope='eha'),
+    # held out of the bank: other frictions and non-friction changes on the realistic EHAs
+    Fault('spherical_joints_x3', 'other_friction', 3.0, spherical_joints=3.0,
+          scope='held_out'),
+    Fault('piston_heads_x2', 'other_friction', 2.0, piston_heads=2.0, scope='held_out'),
+    Fault('pressure_gain_0.95', 'not_friction', 0.95, pressure_gain=0.95, scope='held_out'),
+    Fault('torque_offset_+0.1nm', 'not_friction', 0.1, torque_offset_nm=0.1,
+          scope='held_out'),
+    Fault('drive_loss_+0.1nm', 'drive_loss', 0.1, drive_loss_nm=0.1, scope='held_out'),
 )
 """The faults, in table order; the first is the nominal pump."""
 
@@ -427,7 +456,8 @@ class BankSettings:
     families: tuple[str, ...] | None = None
     """Only these families (None: all)."""
     held_out: bool = False
-    """Run `HELD_OUT_FAMILIES` instead of `FAMILIES` (``families`` then picks among them)."""
+    """Run what the bank holds out instead (`Fault.applies_to`): `HELD_OUT_FAMILIES` with
+    every realistic fault and the held-out faults on every realistic family."""
     faults: tuple[str, ...] | None = None
     """Only these faults (None: all)."""
     eha: EhaBankSettings | None = None
