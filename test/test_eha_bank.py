@@ -170,20 +170,32 @@ def test_a_thinner_film_adds_couette_shear_and_coulomb_factors_scale_breakaway()
 
 # -- sensors and message streams ------------------------------------------------------------
 
-def test_measured_torque_is_gain_times_the_delivered_torque_plus_offset():
-    scen = scenario('eha_pick_place', 'valve_plate_x1.8')
-    sim = simulate_scenario(scen, cached_table(load_pump(None)))
-    d = draw_eha(scen)
+def closed_form_torque_nm(scen, sim):
+    """
+    Return the torque QUIET sensors measure [N m].
+
+    1.02 x the delivered torque + 0.01 N m, with the fault's friction factors, drive loss
+    and offset from the onset at 20 s.
+    """
+    fault, d = scen.fault, draw_eha(scen)
     truth = true_table(d.variant).lookup_array(sim.true_speed_rad_s, sim.true_pressure_diff_pa,
                                                sim.true_viscosity_m2_s)
     after = sim.t_s >= 20.0
-    friction = sum(truth[f'{c}_nm'] * (np.where(after, 1.8, 1.0) if c == 'valve_plate' else 1.0)
+    friction = sum(truth[f'{c}_nm'] * np.where(after, fault.factors[c], 1.0)
                    for c in COMPONENTS)
     v_g = load_pump(None).geometry.displacement_m3
     delivered = v_g * sim.true_pressure_diff_pa / (2 * math.pi) + friction + \
         d.rotor_inertia_kg_m2 * sim.true_accel_rad_s2 + \
-        d.drive_loss_nm * np.tanh(sim.true_speed_rad_s / 2.0)
-    np.testing.assert_allclose(sim.torque_nm, 1.02 * delivered + 0.01, rtol=1e-9, atol=1e-9)
+        (d.drive_loss_nm + fault.drive_loss_nm * after) * np.tanh(sim.true_speed_rad_s / 2.0)
+    return 1.02 * delivered + 0.01 + fault.torque_offset_nm * after
+
+
+def test_measured_torque_is_gain_times_the_delivered_torque_plus_offset():
+    scen = scenario('eha_pick_place', 'valve_plate_x1.8')
+    sim = simulate_scenario(scen, cached_table(load_pump(None)))
+    d = draw_eha(scen)
+    np.testing.assert_allclose(sim.torque_nm, closed_form_torque_nm(scen, sim), rtol=1e-9,
+                               atol=1e-9)
     assert sim.t_s.size == 40000 and np.all(np.diff(sim.t_s) > 0)  # no drops, no duplicates
     # the node is told the installation's J to +-10 % and its drive loss
     config = scen.estimator_config()
@@ -197,18 +209,8 @@ def test_a_held_out_fault_changes_the_measured_signals_by_its_closed_form(name):
     fault = FAULT[name]
     scen = scenario('eha_pick_place', name)
     sim = simulate_scenario(scen, cached_table(load_pump(None)))
-    d = draw_eha(scen)
-    truth = true_table(d.variant).lookup_array(sim.true_speed_rad_s, sim.true_pressure_diff_pa,
-                                               sim.true_viscosity_m2_s)
-    after = sim.t_s >= 20.0
-    friction = sum(truth[f'{c}_nm'] * np.where(after, fault.factors[c], 1.0)
-                   for c in COMPONENTS)
-    v_g = load_pump(None).geometry.displacement_m3
-    delivered = v_g * sim.true_pressure_diff_pa / (2 * math.pi) + friction + \
-        d.rotor_inertia_kg_m2 * sim.true_accel_rad_s2 + \
-        (d.drive_loss_nm + fault.drive_loss_nm * after) * np.tanh(sim.true_speed_rad_s / 2.0)
-    np.testing.assert_allclose(sim.torque_nm, 1.02 * delivered + 0.01 +
-                               fault.torque_offset_nm * after, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(sim.torque_nm, closed_form_torque_nm(scen, sim), rtol=1e-9,
+                               atol=1e-9)
     # the pressure sensor (no offset, no noise here) reads the gain times the true one
     gain = np.where(sim.pressure_t_s >= 20.0, fault.pressure_gain, 1.0)
     np.testing.assert_allclose(sim.pressure_diff_pa, gain * np.interp(
@@ -332,7 +334,7 @@ def test_the_held_out_bank_runs_what_the_bank_holds_out_at_its_size():
         assert size(runs, family, bank_faults) == size(bank, 'eha_pick_place', bank_faults)
     for family in held + realistic:  # the held-out faults on every realistic family
         assert size(runs, family, held_faults) == {
-            fault: [(2700.0, True)] * 3 for fault in held_faults}
+            fault: [(FULL.eha.fault_duration_s, True)] * 3 for fault in held_faults}
     assert len(runs) == len(held) * (len(bank_faults) + len(held_faults)) * 3 + \
         len(realistic) * len(held_faults) * 3  # nothing the bank runs
 
