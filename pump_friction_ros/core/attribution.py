@@ -28,10 +28,16 @@ torque_gain         healthy T_th s + friction + L + J a s        relative gain [
 pressure_gain       -T_th s (a pressure read (1 + g) too high)   relative gain [-]
 torque_offset       s (does not turn with the motion)            [N m]
 drive_loss          1 (opposes the motion)                       [N m]
+spherical_joints    healthy joints' friction l_o T_j             relative change [-]
 ==================  ===========================================  =====================
 
 (l_vp = 1 + b_vp and l_o = 1 + b_o from the baseline: a change relative to the healthy
-pump.) Over the windows since the change (those since the alarmed CUSUM last left zero, with
+pump.)
+
+The spherical joints are a cause of the isolation only, their change fitted over delta >= -1
+(``causes``).
+
+Over the windows since the change (those since the alarmed CUSUM last left zero, with
 a memory of ``isolation_memory_s``), each weighted by its inverse noise variance, the
 generalised likelihood ratio of cause j against no change is T_j = (sum s_j d)^2 / sum s_j^2
 (Basseville & Nikiforov 1993, ch. 7; Isermann 2006, ch. 15). The largest names the cause
@@ -69,39 +75,27 @@ import math
 
 import numpy as np
 
-from .baseline import Baseline, read_count, read_sums
+from .baseline import Baseline
+from .causes import CAUSES, CLASS as _CLASS, DETECTED_CAUSES, LOWEST as _LOWEST, Verdict
 from .change_episodes import ChangeEpisodes
 from .change_stats import ChangeStats
 from .drift_nuisance import DriftNuisance
 from .friction_bias import FrictionBias, Z95  # a reported scale's std: its 95 % half-width / Z95
 from .friction_choice import choose_friction
 from .healthy_level import interval, with_unseen_level
+from .isolation_state import isolation_state, IsolationSums, read_isolation_state
 from .signatures import signature_matrix  # (the isolation's: exported here)
 from .verdict_words import friction_named, FRICTIONS, with_oil, WORDS as _WORDS
 
-__all__ = ['CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict', 'signature_matrix']
+__all__ = ['CAUSES', 'DETECTED_CAUSES', 'AttributionSettings', 'FaultIsolation', 'Verdict',
+           'signature_matrix']
 
-CAUSES = ('valve_plate', 'other_friction', 'torque_gain', 'pressure_gain', 'torque_offset',
-          'drive_loss')
-"""The single-cause explanations of a change, in signature order."""
-_VP, _OTHER = 0, 1
+_VP, _OTHER, _JOINTS = 0, 1, CAUSES.index('spherical_joints')
+_GAINS = (CAUSES.index('torque_gain'), CAUSES.index('pressure_gain'))
 _N = len(CAUSES)
 MIN_LEVEL = 0.2
 """The uncertainty of a reported scale divides by the learnt friction level; a level below
 this times the model's is taken at it (a guard of the division, not a figure of the pump)."""
-
-
-class Verdict:
-    """What explains the change, as the classes the status message and the bank use."""
-
-    NONE = 'none'
-    VALVE_PLATE = 'valve_plate'
-    OTHER_FRICTION = 'other_friction'
-    NOT_FRICTION = 'not_friction'
-    CANNOT_TELL = 'cannot_tell'
-
-
-_CLASS = (Verdict.VALVE_PLATE, Verdict.OTHER_FRICTION) + (Verdict.NOT_FRICTION,) * 4
 
 
 @dataclass(frozen=True)
@@ -128,7 +122,7 @@ def _evidence(stats: ChangeStats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     safe, t = np.where(ok, gjj, 1.0), stats.glr()
     # an F-test rather than a chi-square: the noise scaled by how badly even the best
     inflation = stats.lack_of_fit()  # single cause fits (model error is not white noise)
-    delta = np.where(ok, stats.b / safe, math.nan)
+    delta = np.where(ok, np.maximum(stats.b / safe, stats.lowest), math.nan)
     std = np.where(ok, np.sqrt(inflation / safe), math.nan)
     return t / inflation, delta, std
 
@@ -152,10 +146,10 @@ class FaultIsolation:
     def __init__(self, settings: AttributionSettings, viscosity_assumed: bool) -> None:
         self.settings = settings
         self.viscosity_assumed = viscosity_assumed
-        self.stats = ChangeStats(_N)
+        self.stats = ChangeStats(_N, _LOWEST)
         # the windows that show the change: one that comes and goes (change_episodes)
         self.episodes = ChangeEpisodes(_N, settings.isolation_episode_lack_of_fit,
-                                       settings.attribution_z)
+                                       settings.attribution_z, _LOWEST)
         self.drift = DriftNuisance(_N)  # a k_t drift too small to learn (drift_nuisance)
         self.bias = FrictionBias()  # what the baseline mispredicted before the change
 
@@ -167,14 +161,15 @@ class FaultIsolation:
         self.bias.reset()
 
     def add(self, s: np.ndarray, d_nm: float, weight: float, duration_s: float,
-            changing: bool, drift_nm: float = 0.0, oil_nm: float = 0.0) -> None:
+            changing: bool, drift_nm: float = 0.0, oil_nm: float = 0.0,
+            joints_nm: float = 0.0) -> None:
         """
         Add one window, or forget the windows when no change is under way.
 
         Parameters
         ----------
         s : ndarray
-            Signatures of the window (``signature_matrix @ h``).
+            Signatures of the window of `DETECTED_CAUSES` (``signature_matrix @ h``).
         d_nm : float
             Its residual minus the baseline's prediction [N m].
         weight : float
@@ -191,8 +186,12 @@ class FaultIsolation:
         oil_nm : float
             The friction change of the oil's band at this window, where the viscosity is
             assumed (``oil_allowance``; 0: none) [N m]: the intervals span it (`scales`).
+        joints_nm : float
+            The spherical joints' signature (``signatures.joints_signature``) [N m per
+            unit] (0: none, the joints never named).
 
         """
+        s = np.append(s, joints_nm)
         keep = math.exp(-duration_s / self.settings.isolation_memory_s)
         self.drift.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
         self.bias.add(s, drift_nm, d_nm, weight, keep, changing, duration_s)
@@ -282,9 +281,31 @@ class FaultIsolation:
             cause named or -1).
 
         """
+        verdict, words, named, _ = self._reading()
+        return verdict, words, named
+
+    def may_be_measurement(self) -> bool:
+        """
+        Return whether the change may be the torque measurement's or the pressure sensor's.
+
+        Returns
+        -------
+        bool
+            The verdict is not friction, or cannot tell a gain from the spherical joints
+            (one signature where the pump only drives the load): a drift of the gain with
+            the oil temperature may still explain it (``gain_follow`` tells by its time
+            course, which a step of the joints does not have).
+
+        """
+        verdict, _, _, pair = self._reading()
+        return verdict == Verdict.NOT_FRICTION or (
+            verdict == Verdict.CANNOT_TELL and _JOINTS in pair and any(g in pair for g in _GAINS))
+
+    def _reading(self) -> tuple[str, str, int, tuple[int, ...]]:
+        """Return `verdict`'s tuple and, where it cannot tell two causes apart, their indices."""
         stats = self.stats
         if not stats.windows:
-            return Verdict.NONE, 'no change from the baseline', -1
+            return Verdict.NONE, 'no change from the baseline', -1, ()
         # a change that comes and goes, read on the windows that show it (change_episodes)
         # to tell which friction; a split naming none is not taken (test_friction_line)
         episodic = self.comes_and_goes() and \
@@ -296,14 +317,18 @@ class FaultIsolation:
         order = [int(i) for i in np.argsort(-np.nan_to_num(t, nan=-1.0))]
         j, k = order[0], order[1]
         if not t[j] >= z2:
-            return Verdict.NONE, 'no single cause stands out yet', -1
+            return Verdict.NONE, 'no single cause stands out yet', -1, ()
+        if {j, k} == {_OTHER, _JOINTS} and not t[j] - t[k] >= z2:
+            # the joints are a part of the other friction: where the two lead together, the
+            # other friction is named, its lead taken over the next cause
+            j, k = _OTHER, order[2]
         g = stats.g
         cos = float(g[j, k] / math.sqrt(g[j, j] * g[k, k])) if g[k, k] > 0.0 else 0.0
         close = not t[j] - t[k] >= z2
         tied = close and abs(cos) >= self.settings.identifiability_correlation
         if close and _CLASS[j] == _CLASS[k] == Verdict.NOT_FRICTION:
             return (Verdict.NOT_FRICTION, f'not friction: {_WORDS[CAUSES[j]]} or '
-                    f'{_WORDS[CAUSES[k]]}', j)
+                    f'{_WORDS[CAUSES[k]]}', j, ())
         if not episodic and j in (_VP, _OTHER) and (not close or k in (_VP, _OTHER)):
             # friction: which one is told with a k_t drift too small to be learnt profiled
             # out, as its size is (the same as above where the drift carries nothing)
@@ -315,27 +340,32 @@ class FaultIsolation:
                     f'{_WORDS[CAUSES[_VP]]} or {_WORDS[CAUSES[_OTHER]]}: the choice turns on '
                     'whether the baseline was already off before the change (evidence: valve '
                     'plate {:.0f} against other friction {:.0f} with that bias fitted, {:.0f} '
-                    'against {:.0f} without)'.format(*split), FRICTIONS, assumed), -1)
+                    'against {:.0f} without)'.format(*split), FRICTIONS, assumed), -1,
+                    (_VP, _OTHER))
             close = not t[j] - t[k] >= z2
             tied = close and abs(cos) >= self.settings.identifiability_correlation
         pair = (CAUSES[j], CAUSES[k])
         if tied:
+            parted = ''
+            if _JOINTS in (j, k) and any(i in _GAINS for i in (j, k)):
+                parted = ': running that both drives and overruns the load tells them apart'
             return (Verdict.CANNOT_TELL, with_oil(
                 f'cannot tell {_WORDS[pair[0]]} from {_WORDS[pair[1]]} on this duty cycle '
-                f'(signatures correlated {cos:+.3f} over the points seen)', pair, assumed), -1)
+                f'(signatures correlated {cos:+.3f} over the points seen{parted})', pair,
+                assumed), -1, (j, k))
         if close:
             return (Verdict.CANNOT_TELL, with_oil(
                 f'{_WORDS[pair[0]]} or {_WORDS[pair[1]]}: not yet told apart (evidence '
-                f'{t[j]:.0f} against {t[k]:.0f})', pair, assumed), -1)
+                f'{t[j]:.0f} against {t[k]:.0f})', pair, assumed), -1, (j, k))
         episodes = ''
         if episodic:
             episodes = (f'it comes and goes, shown in {100.0 * self.episodes.fraction():.0f} '
                         "% of the change's windows")
-        if j not in (_VP, _OTHER):
+        if _CLASS[j] == Verdict.NOT_FRICTION:
             size = f'{delta[j]:+.3g}' + (' N m' if CAUSES[j] in ('torque_offset', 'drive_loss')
                                          else '')
             return _CLASS[j], f'not friction: {_WORDS[CAUSES[j]]} {size}' + (
-                f' while it shows ({episodes})' if episodic else ''), j
+                f' while it shows ({episodes})' if episodic else ''), j, ()
         scale = f'scale {1.0 + self.friction_change(j)[0]:.2f} of healthy'
         if episodic:  # a line through on and off means nothing: its size while it shows
             scale += f', {1.0 + delta[j]:.2f} while it shows: {episodes}'
@@ -344,7 +374,7 @@ class FaultIsolation:
             if line is not None:
                 scale += (f', {1.0 + line[0]:.2f} now and '
                           f'{"rising" if line[2] < 0.0 else "falling"}')
-        return _CLASS[j], friction_named(CAUSES[j], scale, assumed), j
+        return _CLASS[j], friction_named(CAUSES[j], scale, assumed), j, ()
 
     def scales(self, baseline: Baseline, undetectable: np.ndarray, confirmed: bool,
                oil_moved: bool = False) -> tuple[float, float, float, float]:
@@ -405,6 +435,8 @@ class FaultIsolation:
                 out += [1.0, with_unseen_level(-half, half, u * oil_moved)[1] / Z95]
             return out[0], out[1], out[2], out[3]
         verdict, _, named = self.verdict()
+        if named == _JOINTS:  # a part of the other friction: its own fit spans their change
+            named = _OTHER
         level_std, coef = baseline.std(), baseline.coefficients
         for i in (_VP, _OTHER):
             delta, std = self.friction_change(i)
@@ -443,18 +475,12 @@ class FaultIsolation:
         return out[0], out[1], out[2], out[3]
 
     def state(self) -> dict[str, object]:
-        """Return the sums as plain values."""
-        st = self.stats
-        return {'g': st.g.tolist(), 'b': st.b.tolist(), 'c': float(st.c),
-                'count': float(st.count), 'windows': int(st.windows),
-                'g1': st.g1.tolist(), 'g2': st.g2.tolist(),
-                'b1': st.b1.tolist(), 'bv': st.bv.tolist(), 'bv1': st.bv1.tolist(),
-                'drift': self.drift.state(), 'bias': self.bias.state(),
-                'episodes': self.episodes.state()}
+        """Return the sums as plain values (``isolation_state``)."""
+        return isolation_state(IsolationSums(self.stats, self.drift, self.bias, self.episodes))
 
     def load(self, state: dict[str, object]) -> None:
         """
-        Restore `state`'s sums.
+        Restore `state`'s sums, of this release or an older one (``isolation_state``).
 
         Parameters
         ----------
@@ -467,31 +493,7 @@ class FaultIsolation:
             Missing or malformed sums.
 
         """
-        (g, b), (c, count) = read_sums(state, {'g': (_N, _N), 'b': (_N,)}, ('c', 'count'),
-                                       'isolation', grams=('g',))
-        # sums that came later: a file without them, from the next window on (the oil
-        # band's: no band until now; the bias's: none while a change under way lasts)
-        (g1, g2, b1), _ = read_sums(state, {'g1': (_N,), 'g2': (_N,), 'b1': (_N,)}, (),
-                                    'isolation') if 'g1' in state else ([np.zeros(_N)] * 3, [])
-        (bv, bv1), _ = read_sums(state, {'bv': (_N,), 'bv1': (_N,)}, (), 'isolation') \
-            if 'bv' in state else ([np.zeros(_N)] * 2, [])
-        windows = read_count(state, 'windows', 'isolation')
-        drift, bias = DriftNuisance(_N), FrictionBias()
-        if 'drift' in state:
-            drift.load(state['drift'])  # type: ignore[arg-type]
-            if 'x1' not in state['drift']:  # type: ignore[operator]
-                # without the drift's age-weighted sum the line's do not fit together (it
-                # named the wrong friction): the windows count as of one age, as its zeros
-                g1, g2, b1, bv1 = np.zeros(_N), np.zeros(_N), np.zeros(_N), np.zeros(_N)
-        if 'bias' in state:
-            bias.load(state['bias'])  # type: ignore[arg-type]
-        else:
-            bias.usable = not windows
-        bias.prior_precision = self.bias.prior_precision  # the monitor's
-        episodes = ChangeEpisodes(_N, self.episodes.ratio, self.episodes.z)
-        if 'episodes' in state:  # else (a file from before them) from the next window on
-            episodes.load(state['episodes'])  # type: ignore[arg-type]
-        st = self.stats  # all read: replaced together
-        st.g, st.b, st.c, st.count, st.windows = g, b, c, count, windows
-        st.g1, st.g2, st.b1, st.bv, st.bv1 = g1, g2, b1, bv, bv1
-        self.drift, self.bias, self.episodes = drift, bias, episodes
+        sums = read_isolation_state(state, IsolationSums(self.stats, self.drift, self.bias,
+                                                         self.episodes))
+        self.stats, self.drift, self.bias, self.episodes = (sums.stats, sums.drift, sums.bias,
+                                                            sums.episodes)

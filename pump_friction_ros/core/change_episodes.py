@@ -93,15 +93,17 @@ class ChangeEpisodes:
 
     """
 
-    def __init__(self, causes: int, lack_of_fit: float, z: float) -> None:
+    def __init__(self, causes: int, lack_of_fit: float, z: float,
+                 lowest: np.ndarray | None = None) -> None:
         self._n = causes
+        self.lowest = lowest
         self.ratio = lack_of_fit
         self.z = z
         self.clear()
 
     def clear(self) -> None:
         """Forget every window."""
-        self.on = ChangeStats(self._n)
+        self.on = ChangeStats(self._n, self.lowest)
         self.seen = 0.0  # the change's windows, forgotten as the sums (every one's count)
         self.switches = 0.0  # windows that differ from the one before, forgotten as the sums
         self.last: bool | None = None  # whether the window before showed the change
@@ -240,7 +242,7 @@ class ChangeEpisodes:
                              'change than seen')
         if last is not None and type(last) is not bool:
             raise ValueError(f'isolation episodes: last {last!r}, not true, false or null')
-        on = ChangeStats(n)
+        on = ChangeStats(n, self.lowest)
         on.g, on.b, on.c, on.count, on.windows, on.g1, on.g2, on.b1 = \
             g, b, c, count, windows, g1, g2, b1
         self.on, self.seen, self.switches, self.last = on, seen, switches, last

@@ -43,11 +43,16 @@ class ChangeStats:
     ----------
     causes : int
         Length of a window's signature vector s (the isolation's `CAUSES`).
+    lowest : ndarray, optional
+        Per cause, the least change it can have (a friction cannot fall below none: -1;
+        -inf: no bound) [cause's units]; None: no cause bounded.
 
     """
 
-    def __init__(self, causes: int) -> None:
+    def __init__(self, causes: int, lowest: np.ndarray | None = None) -> None:
         self._n = causes
+        self.lowest = np.full(causes, -math.inf) if lowest is None else np.asarray(
+            lowest, dtype=float)
         self.clear()
 
     def clear(self) -> None:
@@ -241,9 +246,30 @@ class ChangeStats:
         return abs(r0) / g0, now
 
     def glr(self) -> np.ndarray:
-        """Return each cause's GLR statistic b_j^2 / g_jj [-] (NaN: no signature of it)."""
+        """
+        Return each cause's GLR statistic [-] (NaN: no signature of it).
+
+        Unbounded, b_j^2 / g_jj at delta_j = b_j / g_jj. Where that change lies below the
+        least the cause can have (``lowest``: a friction cannot fall below none), the
+        likelihood over the changes it can have is largest at the bound l: T_j = 2 l b_j -
+        l^2 g_jj, less than b_j^2 / g_jj by g_jj (delta_j - l)^2 (the GLR maximises the
+        likelihood over the admissible changes only).
+
+        Returns
+        -------
+        ndarray
+            T_j per cause [-].
+
+        """
         gjj = np.diag(self.g)
-        return np.where(gjj > 0.0, self.b ** 2 / np.where(gjj > 0.0, gjj, 1.0), math.nan)
+        ok = gjj > 0.0
+        safe = np.where(ok, gjj, 1.0)
+        delta = self.b / safe
+        bound = np.where(delta < self.lowest, self.lowest, delta)
+        bound = np.where(np.isfinite(bound), bound, 0.0)
+        t = np.where(delta < self.lowest, 2.0 * bound * self.b - bound * bound * gjj,
+                     self.b ** 2 / safe)
+        return np.where(ok, t, math.nan)
 
     def best_glr(self) -> float:
         """Return the best single cause's GLR statistic [-] (0: no cause has a signature)."""

@@ -375,7 +375,7 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
     other = (bearing + joints) + heads
     released = core.settled.update_many(
         stamp, restarts, np.where(has_torque, measured - steady, math.nan), steady_now,
-        (inertia, vp, other, theoretical, speed, accel, viscosity))
+        (inertia, vp, other, theoretical, speed, accel, viscosity, joints))
     monitored = np.zeros(stamp.size, dtype=bool)
     monitored[released.positions] = True
     monitor = core.monitor
@@ -384,7 +384,7 @@ def _build(core: TorqueEstimator, stamp: np.ndarray, speed: np.ndarray, dp: np.n
         monitor.theta_rest, monitor.valve_plate_scale_std, monitor.rest_scale_std)]
     if released.positions.size:
         trace = _monitor(core, released, (inertia, vp, other, theoretical, speed, accel,
-                                          viscosity))
+                                          viscosity, joints))
         counts['monitor_samples'] += released.positions.size
         # each estimate carries the monitor's state after the latest monitored sample
         latest = np.cumsum(monitored)
@@ -427,7 +427,7 @@ def _monitor(core: TorqueEstimator, released: Released,
 
     ``released``: `SettledResidual.update_many`'s, payloads by position in ``columns``
     (inertia, valve plate, other friction, theoretical torque, speed, acceleration,
-    viscosity) or, for
+    viscosity, spherical joints) or, for
     samples of an earlier chunk, as tuples. The arithmetic is `_monitor`'s, element by
     element.
     """
@@ -435,7 +435,7 @@ def _monitor(core: TorqueEstimator, released: Released,
     at = released.sources[len(old):]
     fields = [np.concatenate((np.array([cast(tuple, e)[j] for e in old], dtype=float),
                               column[at])) for j, column in enumerate(columns)]
-    inertia, vp, other, theoretical, speed, accel, viscosity = fields
+    inertia, vp, other, theoretical, speed, accel, viscosity, joints = fields
     stamps, filtered = released.stamps_ns, released.filtered_nm
     sign = np.where(speed > 0.0, 1.0, -1.0)
     last = core._monitor_stamp_ns
@@ -453,4 +453,4 @@ def _monitor(core: TorqueEstimator, released: Released,
                                     ((filtered - inertia) * sign).tolist(), vp.tolist(),
                                     other.tolist(), theoretical.tolist(), sign.tolist(),
                                     accel.tolist(), np.abs(speed).tolist(),
-                                    viscosity.tolist())
+                                    viscosity.tolist(), joints.tolist())

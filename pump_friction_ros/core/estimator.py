@@ -412,7 +412,8 @@ class TorqueEstimator:
             released = self.settled.update(
                 stamp_ns, self.filter.restarts, measured - steady,
                 abs(speed) >= self._monitor_min_speed and abs(accel) <= self._monitor_max_accel,
-                (inertia, vp, bearing + joints + heads, theoretical, speed, accel, viscosity))
+                (inertia, vp, bearing + joints + heads, theoretical, speed, accel, viscosity,
+                 joints))
             if released is not None:
                 self._monitor(*released)
         else:
@@ -427,9 +428,9 @@ class TorqueEstimator:
         return estimate
 
     def _monitor(self, stamp_ns: int, filtered_nm: float,
-                 payload: tuple[float, float, float, float, float, float, float]) -> None:
-        """Feed one settled sample (released by `SettledResidual`) to the wear monitor."""
-        inertia, vp, other, theoretical, speed, accel, viscosity = payload
+                 payload: tuple[float, ...]) -> None:
+        """Feed one settled sample (released by `SettledResidual`: eight floats) to the monitor."""
+        inertia, vp, other, theoretical, speed, accel, viscosity, joints = payload
         sign = 1.0 if speed > 0.0 else -1.0
         last = self._monitor_stamp_ns
         if last is None and self._learnt_first_ns is None:
@@ -439,7 +440,7 @@ class TorqueEstimator:
         self._monitor_stamp_ns = stamp_ns
         self.monitor.update(stamp_ns * 1e-9, gap if gap <= self._monitor_max_dt else 0.0,
                             (filtered_nm - inertia) * sign, vp, other, theoretical, sign,
-                            accel, abs(speed), viscosity)
+                            accel, abs(speed), viscosity, joints)
         self.counts['monitor_samples'] += 1
 
     # -- diagnostics ----------------------------------------------------------------------

@@ -208,7 +208,7 @@ class GainFollow:
         """
         delta_c = temperature_c - reference_c
         if not (math.isfinite(delta_c) and delta_c) or alarm_verdict in _FRICTIONS or \
-                isolation.verdict()[0] != Verdict.NOT_FRICTION:
+                not isolation.may_be_measurement():
             return False
         i, step = self._drift_fit(isolation)
         if i < 0:

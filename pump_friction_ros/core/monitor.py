@@ -56,6 +56,10 @@ is dropped), and each window mean is one measurement:
 
 `state_dict` / `load_state_dict` carry everything learnt (the baseline's sums, the sums,
 the level), so that the node keeps it across restarts (``baseline_file``).
+
+Longer than 500 lines because `WearMonitor.update_many` is `WearMonitor.update`'s lean loop
+written out, its window sums in locals, beside the scalar path whose results it must give
+bit for bit (``test_chunk_path``).
 """
 
 from __future__ import annotations
@@ -64,7 +68,7 @@ import math
 
 import numpy as np
 
-from .attribution import AttributionSettings, CAUSES, FaultIsolation, signature_matrix
+from .attribution import AttributionSettings, DETECTED_CAUSES, FaultIsolation, signature_matrix
 from .baseline import Baseline, baseline_regressors, N_TERMS
 from .commissioning import Commissioning
 from .gain_follow import GainFollow
@@ -73,13 +77,13 @@ from .monitor_report import MonitorReport
 from .monitor_state import ERROR, MonitorPersistence, MonitorSettings, MonitorTrace, OK, WARN
 from .oil_allowance import OilAllowance
 from .oil_follow import OilFollow
-from .signatures import undetectable_change
+from .signatures import joints_signature, undetectable_change
 from .warm_up_hold import WarmUpHold
 
 __all__ = ['ERROR', 'LEVEL_NAMES', 'MIN_WINDOW_SAMPLES', 'OK', 'STALE', 'WARN',
            'MonitorSettings', 'MonitorTrace', 'WearMonitor']
 
-_TORQUE_GAIN = CAUSES.index('torque_gain')
+_TORQUE_GAIN = DETECTED_CAUSES.index('torque_gain')
 _UNSEEN_CAP = 1e6
 """The undetectable change published where no CUSUM moves with a cause [-]: any size."""
 
@@ -169,13 +173,13 @@ class WearMonitor(MonitorPersistence, MonitorReport):
     def _reset_detection(self, points: bool = True) -> None:
         """Restart the detection; ``points``: forget the recent points too (new signatures)."""
         if points:
-            n = len(CAUSES)  # the signatures' products over running, and that running, both
-            self._recent_s2 = np.zeros((n, n))  # forgotten as the isolation's windows are
+            n = len(DETECTED_CAUSES)  # the signatures' products over running, and that
+            self._recent_s2 = np.zeros((n, n))  # running, both forgotten as the isolation's
             self._recent_s = 0.0
         self.ewma_nm = 0.0
         self._var = 0.0
-        self._pos = np.zeros(len(CAUSES))  # a CUSUM per cause, each side
-        self._neg = np.zeros(len(CAUSES))
+        self._pos = np.zeros(len(DETECTED_CAUSES))  # a CUSUM per cause, each side
+        self._neg = np.zeros(len(DETECTED_CAUSES))
         self.cusum_pos_nm_s = 0.0
         self.cusum_neg_nm_s = 0.0
         self._allowance_nm_s = 0.0  # the oil allowances taken off, summed over running
@@ -193,13 +197,14 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._time = 0.0
         self._se = self._svp = self._so = self._sth = self._sa = 0.0
         self._sw = self._sv = 0.0  # |speed| and viscosity: the oil allowances
+        self._sj = 0.0  # the spherical joints' friction: their signature (isolation only)
 
     # -- samples --------------------------------------------------------------------------
 
     def update(self, t_s: float, dt_s: float, residual_nm: float, valve_plate_nm: float,
                other_nm: float, theoretical_nm: float, sign: float,
                accel_rad_s2: float = 0.0, speed_abs_rad_s: float = 0.0,
-               viscosity_m2_s: float = math.nan) -> int:
+               viscosity_m2_s: float = math.nan, joints_nm: float = 0.0) -> int:
         """
         Take one settled sample.
 
@@ -226,6 +231,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         viscosity_m2_s : float
             The viscosity the expected torque was computed with [m^2/s] (with the
             temperature topic it gives the oil temperature; NaN: not known).
+        joints_nm : float
+            Modelled spherical joints' friction magnitude, a part of ``other_nm`` [N m]
+            (the isolation's joints cause; 0: none, never named).
 
         Returns
         -------
@@ -246,6 +254,7 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         self._sa += accel_rad_s2 * sign
         self._sw += speed_abs_rad_s
         self._sv += viscosity_m2_s
+        self._sj += joints_nm
         if self._time >= self._window_s:
             self._close(t_s)
             self._open(sign)
@@ -256,7 +265,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
                     theoretical_nm: list[float], sign: list[float],
                     accel_rad_s2: list[float] | None = None,
                     speed_abs_rad_s: list[float] | None = None,
-                    viscosity_m2_s: list[float] | None = None) -> MonitorTrace:
+                    viscosity_m2_s: list[float] | None = None,
+                    joints_nm: list[float] | None = None) -> MonitorTrace:
         """
         Take many settled samples in order: `update` for each, in one lean loop.
 
@@ -273,8 +283,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
             Direction of rotation per sample, +1 or -1.
         accel_rad_s2 : list of float, optional
             Filtered acceleration per sample [rad/s^2] (None: 0).
-        speed_abs_rad_s, viscosity_m2_s : list of float, optional
-            Per sample, as `update` takes them [rad/s, m^2/s] (None: 0 and NaN).
+        speed_abs_rad_s, viscosity_m2_s, joints_nm : list of float, optional
+            Per sample, as `update` takes them [rad/s, m^2/s, N m] (None: 0, NaN and 0).
 
         Returns
         -------
@@ -285,22 +295,23 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         window = self._window_s
         cur_sign, n, time = self._sign, self._n, self._time
         se, svp, so, sth, sa = self._se, self._svp, self._so, self._sth, self._sa
-        sw, sv = self._sw, self._sv
+        sw, sv, sj = self._sw, self._sv, self._sj
         accel = [0.0] * len(t_s) if accel_rad_s2 is None else accel_rad_s2
         speeds = [0.0] * len(t_s) if speed_abs_rad_s is None else speed_abs_rad_s
         viscosity = [math.nan] * len(t_s) if viscosity_m2_s is None else viscosity_m2_s
+        joints = [0.0] * len(t_s) if joints_nm is None else joints_nm
         # the state changes only when a window closes: kept as (from sample i, state) runs
         runs = [(0, self._trace_state())]
-        for i, (t, dt, r, vp, other, th, sgn, a, w, nu) in enumerate(zip(
+        for i, (t, dt, r, vp, other, th, sgn, a, w, nu, jt) in enumerate(zip(
                 t_s, dt_s, residual_nm, valve_plate_nm, other_nm, theoretical_nm, sign, accel,
-                speeds, viscosity, strict=True)):
+                speeds, viscosity, joints, strict=True)):
             if sgn != cur_sign:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-                self._sw, self._sv = sw, sv
+                self._sw, self._sv, self._sj = sw, sv, sj
                 self._close(t)
                 cur_sign, n, time, se, svp, so, sth, sa = sgn, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-                sw = sv = 0.0
+                sw = sv = sj = 0.0
                 runs.append((i, self._trace_state()))
             n += 1
             time += dt
@@ -311,19 +322,20 @@ class WearMonitor(MonitorPersistence, MonitorReport):
             sa += a * sgn
             sw += w
             sv += nu
+            sj += jt
             if time >= window:
                 self._sign, self._n, self._time = cur_sign, n, time
                 self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-                self._sw, self._sv = sw, sv
+                self._sw, self._sv, self._sj = sw, sv, sj
                 self._close(t)
                 n, time, se, svp, so, sth, sa = 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-                sw = sv = 0.0
+                sw = sv = sj = 0.0
                 runs.append((i, self._trace_state()))
         total = len(t_s)
         self.samples += total
         self._sign, self._n, self._time = cur_sign, n, time
         self._se, self._svp, self._so, self._sth, self._sa = se, svp, so, sth, sa
-        self._sw, self._sv = sw, sv
+        self._sw, self._sv, self._sj = sw, sv, sj
         columns: tuple[list, ...] = ([], [], [], [], [], [], [])
         for (start, state), (end, _) in zip(runs, [*runs[1:], (total, ())], strict=True):
             if end > start:
@@ -399,7 +411,8 @@ class WearMonitor(MonitorPersistence, MonitorReport):
         changing = self.cusum_pos_nm_s > 0.0 or self.cusum_neg_nm_s > 0.0
         if not changing or math.isnan(self.change_start_s):  # the isolation's sums start
             self.change_start_s = t_s if changing else math.nan
-        self.isolation.add(sig, d, 1.0 / var, duration, changing, drift, viscous)
+        self.isolation.add(sig, d, 1.0 / var, duration, changing, drift, viscous,
+                           joints_signature(baseline, self._sj * inv))
         if self._gain_follow is not None:  # every window: a drift shows before the change
             self._gain_follow.add(sig, d, 1.0 / var, duration,
                                   temperature - baseline.temperature_c)
@@ -448,9 +461,9 @@ class WearMonitor(MonitorPersistence, MonitorReport):
     def _set_signatures(self) -> None:
         """Make the causes' signature matrix and its RMS per cause over commissioning."""
         if self.baseline is None:
-            self._m = np.zeros((len(CAUSES), N_TERMS))
-            self._norm = np.ones(len(CAUSES))
-            self._undetectable = np.zeros(len(CAUSES))
+            self._m = np.zeros((len(DETECTED_CAUSES), N_TERMS))
+            self._norm = np.ones(len(DETECTED_CAUSES))
+            self._undetectable = np.zeros(len(DETECTED_CAUSES))
             self._unseen_nm = 0.0
             return
         self._m = signature_matrix(self.baseline, self._drive_loss, self._inertia)

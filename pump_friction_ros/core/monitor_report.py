@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .attribution import CAUSES, Verdict
+from .attribution import DETECTED_CAUSES, Verdict
 from .healthy_level import oil_seen_moving
 
 if TYPE_CHECKING:
@@ -80,11 +80,11 @@ class MonitorReport:
         Returns
         -------
         dict
-            Cause (`attribution.CAUSES`) -> relative change [-] (torque offset and drive
+            Cause (`attribution.DETECTED_CAUSES`) -> relative change [-] (torque offset and drive
             loss: [N m]).
 
         """
-        return dict(zip(CAUSES, self._undetectable.tolist(), strict=True))
+        return dict(zip(DETECTED_CAUSES, self._undetectable.tolist(), strict=True))
 
     @property
     def oil_note(self) -> str:

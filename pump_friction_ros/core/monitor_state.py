@@ -32,7 +32,7 @@ from typing import NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
-from .attribution import CAUSES
+from .attribution import DETECTED_CAUSES
 from .baseline import read_count, read_sums
 from .oil_follow import followed
 
@@ -222,7 +222,7 @@ class MonitorPersistence:
             'ewma_nm', 'ewma_var_nm2', 'alarm_onset_s'))
         pos = np.asarray(state['cusum_pos_nm_s'], dtype=float)
         neg = np.asarray(state['cusum_neg_nm_s'], dtype=float)
-        if pos.shape != (len(CAUSES),) or neg.shape != pos.shape or not (
+        if pos.shape != (len(DETECTED_CAUSES),) or neg.shape != pos.shape or not (
                 np.all(np.isfinite(pos)) and np.all(np.isfinite(neg))
                 and math.isfinite(ewma) and math.isfinite(var)):
             raise ValueError('monitor sums of the wrong shape or not finite')
@@ -235,7 +235,7 @@ class MonitorPersistence:
             raise ValueError('monitor allowance sums negative or not finite')
         self._allowance_nm_s, self._gain_allowance_nm_s, self._allowance_s = allowance
         # so did the recent points' signature sums: without them, commissioning's points
-        n = len(CAUSES)
+        n = len(DETECTED_CAUSES)
         s2, running = np.zeros((n, n)), 0.0
         if 'recent_running_s' in state or 'recent_signature_s2' in state:  # both, or refused
             (s2,), (running,) = read_sums(state, {'recent_signature_s2': (n, n)},

@@ -16,10 +16,11 @@
 The causes' signatures over a window, as linear maps of its regressors.
 
 Each single cause of a change from the healthy baseline (``attribution``: valve plate, other
-friction, torque-measurement gain, pressure-sensor gain, torque offset, drive loss) moves a
-window's residual by delta_j s_j; s = M h with h the window's regressor vector
-(``baseline.baseline_regressors``). Split from ``attribution`` (which exports it) so that the
-isolation's module stays one decision. `undetectable_change` is what the detection's sums
+friction, torque-measurement gain, pressure-sensor gain, torque offset, drive loss, the
+spherical joints) moves a window's residual by delta_j s_j; s = M h with h the window's
+regressor vector (``baseline.baseline_regressors``), and the joints' `joints_signature`.
+Split from ``attribution`` (which exports it) so that the isolation's module stays one
+decision. `undetectable_change` is what the detection's sums
 do not see of each cause's change over the recent signatures.
 """
 
@@ -29,7 +30,7 @@ import numpy as np
 
 from .baseline import Baseline
 
-__all__ = ['signature_matrix', 'undetectable_change']
+__all__ = ['joints_signature', 'signature_matrix', 'undetectable_change']
 
 
 def signature_matrix(baseline: Baseline, drive_loss_nm: float,
@@ -64,6 +65,31 @@ def signature_matrix(baseline: Baseline, drive_loss_nm: float,
                      [0.0, 0.0, 0.0, 0.0, -1.0, 0.0],  # pressure read too high
                      [0.0, 0.0, 0.0, 1.0, 0.0, 0.0],  # torque offset
                      [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]])  # drive loss
+
+
+def joints_signature(baseline: Baseline, joints_nm: float) -> float:
+    """
+    Return the spherical joints' signature over a window: their healthy friction.
+
+    A relative change delta of the joints' friction moves the window's residual by delta
+    l_o T_j: the healthy level of the other friction, of which they are a part, times the
+    modelled joints' friction (Hong & Doh 2004, eq. 3). Not linear in the regressors h
+    (it follows |dp|, not dp s): a cause of the isolation, beside `signature_matrix`'s.
+
+    Parameters
+    ----------
+    baseline : Baseline
+        The healthy signature (its other-friction level).
+    joints_nm : float
+        The window mean of the modelled spherical joints' friction magnitude [N m].
+
+    Returns
+    -------
+    float
+        The signature [N m per unit of delta].
+
+    """
+    return (1.0 + float(baseline.coefficients[1])) * joints_nm
 
 
 def undetectable_change(k_nm: float, norm: np.ndarray, margin_nm: float,

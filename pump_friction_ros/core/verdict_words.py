@@ -32,10 +32,11 @@ __all__ = ['FRICTIONS', 'OIL_ASSUMED', 'WORDS', 'friction_named', 'with_oil']
 WORDS = {'valve_plate': 'valve plate', 'other_friction': 'other friction (bearing, '
          'joints, piston heads)', 'torque_gain': 'torque-measurement gain',
          'pressure_gain': 'pressure-sensor gain', 'torque_offset': 'torque offset',
-         'drive_loss': 'drive loss'}
+         'drive_loss': 'drive loss', 'spherical_joints': 'spherical joints'}
 """Each cause of ``attribution.CAUSES`` as a status message names it."""
 FRICTIONS = ('valve_plate', 'other_friction')
-"""The causes whose torque the oil's viscosity moves."""
+"""The causes whose torque the oil's viscosity moves (not the spherical joints': a Coulomb
+moment R_B mu_B |F_B|, Hong & Doh 2004 eq. 3, mu_B 0.07-0.09 over their sliding speeds, Fig. 9)."""
 OIL_ASSUMED = 'the viscosity is a parameter: no temperature topic'
 """Why the oil is named beside a friction."""
 
@@ -47,7 +48,7 @@ def friction_named(cause: str, scale: str, viscosity_assumed: bool) -> str:
     Parameters
     ----------
     cause : str
-        ``valve_plate`` or ``other_friction``.
+        ``valve_plate``, ``other_friction`` or ``spherical_joints``.
     scale : str
         Its scale as the status message gives it.
     viscosity_assumed : bool
@@ -56,12 +57,14 @@ def friction_named(cause: str, scale: str, viscosity_assumed: bool) -> str:
     Returns
     -------
     str
-        ``valve plate (...)`` or ``not the valve plate: other friction (...)``, each with
-        ``or oil viscosity`` where the viscosity is assumed.
+        ``valve plate (...)``, ``not the valve plate: other friction (...)``, each with
+        ``or oil viscosity`` where the viscosity is assumed, or ``not the valve plate:
+        other friction, the spherical joints (...)``.
 
     """
-    name = 'valve plate' if cause == 'valve_plate' else 'not the valve plate: other friction'
-    if viscosity_assumed:
+    name = {'valve_plate': 'valve plate', 'other_friction': 'not the valve plate: other '
+            'friction'}.get(cause, f'not the valve plate: other friction, the {WORDS[cause]}')
+    if viscosity_assumed and cause in FRICTIONS:
         return f'{name} or oil viscosity ({OIL_ASSUMED}) ({scale})'
     return f'{name} ({scale})'
 
