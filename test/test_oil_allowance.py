@@ -17,7 +17,7 @@
 import math
 
 import numpy as np
-from pump_friction_ros.core.attribution import AttributionSettings, CAUSES, Verdict
+from pump_friction_ros.core.attribution import AttributionSettings, DETECTED_CAUSES, Verdict
 from pump_friction_ros.core.baseline import baseline_regressors
 from pump_friction_ros.core.estimator import TorqueEstimator
 from pump_friction_ros.core.monitor import MonitorSettings, OK, WearMonitor
@@ -143,7 +143,7 @@ def _directions(oil, side, stretch_windows, seed, windows=1200):
     rng = np.random.default_rng(seed)
     mon = _monitor(oil)
     t, alarmed, n = 0.0, False, WINDOW_SAMPLES
-    largest = np.zeros(len(CAUSES))
+    largest = np.zeros(len(DETECTED_CAUSES))
     for w in range(windows):
         speed, vp, other, _, th, _ = oil_window(rng)
         sign = 1.0 if (w // stretch_windows) % 2 == 0 else -1.0

@@ -147,7 +147,7 @@ def _widened(state: dict[str, object], n: int) -> dict[str, object]:
         if not (isinstance(value, list) and len(value) == n - 1):
             return value
         if all(isinstance(row, list) for row in value):  # a matrix: a row and a column
-            return [[*row, 0.0] for row in value] + [[0.0] * n]  # type: ignore[misc]
+            return [[*row, 0.0] for row in value] + [[0.0] * n]
         return [*value, 0.0]
 
     top, drift, episodes = _PER_CAUSE
