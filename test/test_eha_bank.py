@@ -34,7 +34,12 @@ from pump_friction_ros.evaluation.closed_loop import (
     Setpoints,
     simulate_closed_loop,
 )
-from pump_friction_ros.evaluation.eha_scenarios import draw_eha, eha_estimator_config, fault_factor
+from pump_friction_ros.evaluation.eha_scenarios import (
+    draw_eha,
+    eha_estimator_config,
+    fault_episodes,
+    fault_factor,
+)
 from pump_friction_ros.evaluation.eha_settings import SensorSettings
 from pump_friction_ros.evaluation.scenarios import Scenario, simulate_scenario, SimulatedScenario
 from pump_friction_ros.evaluation.sensors import encoder_speed, message_indices
@@ -281,17 +286,41 @@ def test_cold_start_and_the_nodes_viscosity_with_and_without_the_topic():
 def test_fault_factors_steps_ramps_and_episodes():
     t = np.arange(0.0, 1000.0, 0.5)
     rng = np.random.default_rng(0)
-    ramp = fault_factor(FAULT['torque_constant_-5%'], 0.95, t, 100.0, 600.0, rng)
+    step = FAULT['torque_constant_-5%']
+    assert fault_episodes(step, 100.0, t[-1], rng).size == 0  # not intermittent: no draw
+    ramp = fault_factor(step, 0.95, t, 100.0, 600.0, np.zeros(0))
     assert np.all(ramp[t <= 100.0] == 1.0) and ramp[t == 400.0][0] == pytest.approx(0.975)
     assert np.all(ramp[t >= 700.0] == pytest.approx(0.95))
     fault = FAULT['valve_plate_intermittent_1.8']
-    f = fault_factor(fault, 1.8, t, 100.0, 600.0, rng)
+    assert fault_episodes(fault, math.inf, t[-1], rng).size == 0  # never starts
+    f = fault_factor(fault, 1.8, t, 100.0, 600.0, fault_episodes(fault, 100.0, t[-1], rng))
     assert np.all(f[t < 100.0] == 1.0) and f[t == 100.0][0] == 1.8
     edges = t[1:][np.diff(f) != 0]  # the onset, then each end of an episode
     lengths = np.diff(edges)
     assert np.all(lengths[0::2] >= 20.0 - 0.5) and np.all(lengths[0::2] <= 90.0 + 0.5)
     assert np.all(lengths[1::2] >= 20.0 - 0.5) and np.all(lengths[1::2] <= 180.0 + 0.5)
     assert set(np.unique(f)) == {1.0, 1.8}
+
+
+def test_an_intermittent_fault_moves_all_its_factors_in_the_same_episodes():
+    fault = replace(FAULT['valve_plate_intermittent_1.8'], drive_loss_nm=0.1,
+                    pressure_gain=0.95)
+    t = np.arange(0.0, 3000.0, 0.01)  # the joint-state grid
+    tp = np.arange(0.003, 3000.0, 1.0 / 120.0)  # a pressure sensor's own, slower grid
+    episodes = fault_episodes(fault, 500.0, t[-1], np.random.default_rng(4))
+    assert episodes.size >= 10 and episodes[0] == 500.0 and episodes[-1] >= t[-1]
+    friction = np.asarray(fault_factor(fault, 1.8, t, 500.0, 0.0, episodes))
+    share = np.asarray(fault_factor(fault, 2.0, t, 500.0, 0.0, episodes)) - 1.0
+    gain = np.asarray(fault_factor(fault, fault.pressure_gain, tp, 500.0, 0.0, episodes))
+    starts, ends = episodes[0::2], episodes[1::2]  # each 'on' episode [start, end)
+
+    def inside(times):
+        return ((times[:, None] >= starts[None, :len(ends)])
+                & (times[:, None] < ends[None, :])).any(axis=1)
+
+    np.testing.assert_array_equal(friction, np.where(inside(t), 1.8, 1.0))
+    np.testing.assert_array_equal(share, inside(t).astype(float))  # comes and goes with it
+    np.testing.assert_array_equal(gain, np.where(inside(tp), 0.95, 1.0))  # on its own grid
 
 
 # -- bank sizes -------------------------------------------------------------------------------

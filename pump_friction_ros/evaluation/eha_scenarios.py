@@ -61,8 +61,8 @@ from ..physics.oil import WaltherViscosity
 from ..physics.pump_parameters import load_pump
 from ..table.friction_table import FrictionTable
 
-__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_factor', 'oil_temperature',
-           'simulate_eha']
+__all__ = ['EhaDraw', 'draw_eha', 'eha_estimator_config', 'fault_episodes', 'fault_factor',
+           'oil_temperature', 'simulate_eha']
 
 _PLANT_STREAM = 2  # sub-stream of the scenario's seed for the draws (the noise: its own)
 _EPISODE_STREAM = 3  # sub-stream of the intermittent fault's episodes
@@ -187,15 +187,52 @@ def eha_estimator_config(scenario: Scenario) -> EstimatorConfig:
                    drive_loss_torque_nm=d.drive_loss_nm)
 
 
-def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp_s: float,
-                 rng: np.random.Generator) -> np.ndarray | float:
+def fault_episodes(fault: Fault, onset_s: float, end_s: float,
+                   rng: np.random.Generator) -> np.ndarray:
     """
-    Return a fault's factor over time: 1 before the onset, then a step, ramp or episodes.
+    Draw an intermittent fault's on/off episodes once, for every factor it moves.
 
     Parameters
     ----------
     fault : Fault
-        The fault (``ramp``, ``intermittent`` and the episode ranges).
+        The fault (``intermittent`` and the episode ranges).
+    onset_s : float
+        Onset [s] (inf: never).
+    end_s : float
+        The episodes run at least to this time [s].
+    rng : numpy.random.Generator
+        Stream of the episodes' lengths.
+
+    Returns
+    -------
+    ndarray
+        The edges [s]: the onset, then each end of an episode (on, off, on, ...); empty for
+        a fault that is not intermittent or never starts.
+
+    """
+    if not fault.intermittent or not math.isfinite(onset_s):
+        return np.zeros(0)
+    edges, now, on = [onset_s], onset_s, True  # on, off, on, ... from the onset
+    while now < end_s:
+        now += float(rng.uniform(*(fault.episode_on_s if on else fault.episode_off_s)))
+        edges.append(now)
+        on = not on
+    return np.array(edges)
+
+
+def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp_s: float,
+                 episodes: np.ndarray) -> np.ndarray | float:
+    """
+    Return a fault's factor over time: 1 before the onset, then a step, ramp or episodes.
+
+    Every factor of one fault (its friction factors, an additive share, a gain) follows
+    the same episodes, so that an intermittent fault that moves several comes and goes as
+    one.
+
+    Parameters
+    ----------
+    fault : Fault
+        The fault (``ramp``, ``intermittent``).
     value : float
         Its factor (friction factor, torque or pressure gain); 2 gives an additive fault's
         share plus 1 (0 before the onset, 1 at full size).
@@ -205,8 +242,8 @@ def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp
         Onset [s] (inf: never).
     ramp_s : float
         Duration of a ramp [s].
-    rng : numpy.random.Generator
-        Stream of the episodes' lengths.
+    episodes : ndarray
+        An intermittent fault's episode edges, `fault_episodes` [s].
 
     Returns
     -------
@@ -220,12 +257,7 @@ def fault_factor(fault: Fault, value: float, t: np.ndarray, onset_s: float, ramp
         return 1.0 + (value - 1.0) * np.clip((t - onset_s) / ramp_s, 0.0, 1.0)
     if not fault.intermittent:
         return np.where(t >= onset_s, value, 1.0)
-    edges, now, on = [onset_s], onset_s, True  # on, off, on, ... from the onset
-    while now < t[-1]:
-        now += float(rng.uniform(*(fault.episode_on_s if on else fault.episode_off_s)))
-        edges.append(now)
-        on = not on
-    inside = np.searchsorted(np.array(edges), t, side='right')
+    inside = np.searchsorted(episodes, t, side='right')
     return np.where(inside % 2 == 1, value, 1.0)  # odd: inside an 'on' episode
 
 
@@ -264,8 +296,9 @@ def simulate_eha(scenario: Scenario, table: FrictionTable) -> SimulatedScenario:
     law = WaltherViscosity(d.oil.viscosity_40c_m2_s, d.oil.viscosity_100c_m2_s)
     visc = _walther_array(law, temperature)
     true = true_table(d.variant, s.mismatch).lookup_array(speed, dp, visc)
-    episodes = np.random.default_rng([*scenario.seed_key, _EPISODE_STREAM])
     onset, ramp = scenario.onset_s, scenario.ramp_s
+    episodes = fault_episodes(fault, onset, max(float(t[-1]), scenario.duration_s),
+                              np.random.default_rng([*scenario.seed_key, _EPISODE_STREAM]))
     factors = {c: fault_factor(fault, f, t, onset, ramp, episodes)
                for c, f in fault.factors.items()}
     direction = np.tanh(speed / table.zero_speed_threshold_rad_s)

@@ -315,7 +315,8 @@ class Fault:
     torque_gain: float = 1.0
     """Gain change of the measured motor torque (torque constant) [-] (realistic families)."""
     intermittent: bool = False
-    """The friction factors apply in on/off episodes from the onset, starting on."""
+    """Every factor of the fault applies in the same on/off episodes from the onset, starting
+    on."""
     episode_on_s: Range = (20.0, 90.0)
     """Length of an 'on' episode [s] (intermittent faults)."""
     episode_off_s: Range = (20.0, 180.0)
