@@ -138,6 +138,22 @@ def test_replay_with_a_baseline_of_other_parameters_exits_2_naming_them(capsys, 
     assert 'drive_loss_torque_nm (file 0.05, now 0.1)' in err
 
 
+def test_replay_with_a_baseline_whose_state_is_not_finite_exits_2_in_one_line(capsys, tmp_path):
+    path = tmp_path / 'baseline.yaml'
+    learn(capsys, path, NOMINAL)
+    text = path.read_text()
+    first = text.index('monitor_state:')
+    number = text.index('- - ', first) + 4  # the first learnt sum: not finite now
+    end = text.index('\n', number)
+    path.write_text(text[:number] + '.nan' + text[end:])
+    code, out, err = run(capsys, 'replay', WEAR, '--params', SAMPLE_PARAMS, '--baseline', path,
+                         '--quiet', '--workers', '1', '--out', tmp_path / 'out')
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1
+    assert 'monitor_state' in err and 'not finite' in err
+    assert 'started from the baseline file' not in out  # it did not
+
+
 def test_learn_baseline_refuses_bags_of_other_parameters(capsys, tmp_path):
     other = tmp_path / 'other_bag'
     other.mkdir()

@@ -66,14 +66,16 @@ def cmd_replay(args: argparse.Namespace) -> int:
         summaries = run_jobs(jobs, workers=args.workers, dask_address=args.dask)
     finally:
         plan.remove_empty()  # folders made for the fleet that no bag wrote into
-    for note in notes:
-        print(note)
     if single:
         summary = summaries[0]
-        if summary.error:
+        if summary.error:  # one line; the notes (files used, baseline started from) are moot
             raise PumpFrictionError(summary.error)
+        for note in notes:
+            print(note)
         print(summary.formatted())
         return 0
+    for note in notes:
+        print(note)
     for summary in summaries:
         if summary.error:
             print(f'{summary.label}: FAILED: {summary.error}')
