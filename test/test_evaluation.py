@@ -479,7 +479,7 @@ def test_held_out_runs_the_held_out_families_and_no_other(tmp_path, capsys):
     with (out / 'records.csv').open() as handle:
         families = {row['family'] for row in csv.DictReader(handle)}
     assert families == {f.name for f in HELD_OUT_FAMILIES}
-    assert "Bank 'quick', held-out families, seed 0" in printed
+    assert "Bank 'quick', what it holds out, seed 0" in printed
     columns = {cell.strip() for cell in printed.splitlines()[0].split('|')}
     assert {f.label for f in HELD_OUT_FAMILIES} <= columns
     assert not columns & {f.label for f in FAMILIES}

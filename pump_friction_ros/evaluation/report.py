@@ -384,7 +384,7 @@ def format_table(figures: dict[str, Any], result: BankResult | None = None) -> s
               f'Correct attribution: {_rates(figures["attribution_correct_rate"])}.')
     out += ['', legend]
     if result is not None:
-        held = ', held-out families' if result.settings.held_out else ''
+        held = ', what it holds out' if result.settings.held_out else ''
         out.append(f'Bank {result.settings.name!r}{held}, seed {result.seed}: '
                    f'{figures["runs"]} runs,'
                    f' {figures["simulated_hours"]:.2f} h simulated '
