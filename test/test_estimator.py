@@ -156,6 +156,40 @@ def test_stale_inputs_skip_the_estimate_and_diagnostics_say_stale(table):
     assert est.diagnostics(720_000_000).level == OK
 
 
+def test_a_stale_status_names_what_the_samples_meet_now_not_an_old_skip(table):
+    est = make(table)
+    est.on_input(K.SHAFT_SPEED, 10_000_000, 300.0)  # before any pressure: a stale skip
+    assert est.counts['stale_skips'] == 1
+    est.on_input(K.LOAD_PRESSURE, 20_000_000, 100e5)
+    assert est.on_input(K.SHAFT_SPEED, 30_000_000, 300.0) is not None
+    assert est.diagnostics(40_000_000).level == OK
+    # later the speed reads NaN while the pressure stays fresh: no estimate, none stale
+    for i in range(20):
+        t_ns = 100_000_000 + i * 40_000_000
+        est.on_input(K.LOAD_PRESSURE, t_ns, 100e5)
+        assert est.on_input(K.SHAFT_SPEED, t_ns + 1, math.nan) is None
+    assert est.counts['stale_skips'] == 1  # the old skip only
+    snap = est.diagnostics(900_000_000)
+    assert snap.level == STALE
+    assert 'pressure' not in snap.message
+    assert 'rejected_non_finite 20' in snap.message
+    # the pressure goes missing now: its skips grow and the status says so
+    est.on_input(K.SHAFT_SPEED, 1_000_000_000, 300.0)
+    snap = est.diagnostics(1_000_000_000)
+    assert snap.level == STALE and 'pressure' in snap.message
+    assert 'rejected' not in snap.message
+
+
+def test_a_stale_status_does_not_repeat_the_old_estimates_table_flags(table):
+    est = make(table)
+    est.on_input(K.LOAD_PRESSURE, 0, 100e5)
+    fast = float(table.speed_axis_rad_s[-1]) * 1.5  # above the table: clamped and flagged
+    assert est.on_input(K.SHAFT_SPEED, 1_000_000, fast) is not None
+    assert 'outside the table' in est.diagnostics(2_000_000).message
+    snap = est.diagnostics(5_000_000_000)
+    assert snap.level == STALE and 'outside the table' not in snap.message
+
+
 @pytest.mark.parametrize(('call', 'counter'), [
     (lambda e: e.on_input(K.SHAFT_SPEED, 5, math.nan), 'rejected_non_finite'),
     (lambda e: e.on_input(K.LOAD_PRESSURE, 5, math.inf), 'rejected_non_finite'),

@@ -167,3 +167,49 @@ def test_a_command_line_rcl_refuses_exits_1_with_our_line_and_no_traceback(tmp_p
     assert 'Traceback' not in text and len(ours) == 1, text
     assert ours[0].startswith(('torque_estimator: cannot start: failed to initialize rcl',
                                'torque_estimator: cannot start: unknown --ros-args')), text
+
+
+def test_a_malformed_parameter_request_is_dropped_and_the_node_goes_on(table_file, tmp_path):
+    """
+    A SetParameters request of an unknown value type: logged, dropped; the node serves on.
+
+    Jazzy's parameter service converts the request outside its ``try``, so the ``ValueError``
+    leaves ``spin_once``: under ``Executor.spin`` any peer could end the node with it.
+    """
+    from rcl_interfaces.msg import Parameter, ParameterValue
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    proc = start_node(table_file, tmp_path)
+    rclpy.init()
+    probe = rclpy.create_node('malformed_request_probe')
+    ex = SingleThreadedExecutor()
+    ex.add_node(probe)
+    try:
+        setter = probe.create_client(SetParameters, '/torque_estimator/set_parameters')
+        getter = probe.create_client(GetParameters, '/torque_estimator/get_parameters')
+        assert setter.wait_for_service(timeout_sec=30.0)
+        assert getter.wait_for_service(timeout_sec=30.0)
+        bad = SetParameters.Request(parameters=[
+            Parameter(name='stale_timeout_s', value=ParameterValue(type=99))])
+        for _ in range(2):  # twice: the node survives each and counts them
+            setter.call_async(bad)
+            ex.spin_once(timeout_sec=0.5)
+        asked = getter.call_async(GetParameters.Request(names=['stale_timeout_s']))
+        ex.spin_until_future_complete(asked, timeout_sec=30.0)
+        assert asked.done() and proc.poll() is None
+        assert asked.result().values[0].double_value > 0.0  # the value is unchanged
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+        ex.shutdown()
+        probe.destroy_node()
+        rclpy.try_shutdown()
+    text = err.decode(errors='replace')
+    assert proc.returncode == 0, text
+    assert 'Traceback' not in text, text
+    raised = [line for line in text.splitlines() if 'a callback raised ValueError' in line]
+    assert len(raised) == 2 and '(2 such error(s) so far)' in raised[1], text
+    assert len([line for line in text.splitlines() if 'stopping on SIGINT' in line]) == 1, text

@@ -16,7 +16,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 import math
 
@@ -29,6 +29,9 @@ from ..table.friction_table import describe_flags, NOT_FINITE, VISCOSITY_CLAMPED
 
 __all__ = ['DiagnosticSnapshot', 'format_value', 'level_message',
            'snapshot']
+
+_REJECTIONS = tuple(name for name in COUNTERS if name.startswith('rejected_'))
+"""Counters of samples refused (each makes no estimate), as /diagnostics names them."""
 
 _RELATIVE = ('valve_plate', 'other_friction', 'torque_gain')
 """Baseline terms that are relative changes, reported as factors (1: as modelled)."""
@@ -46,8 +49,8 @@ class DiagnosticSnapshot:
 def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int],
              stale_timeout_s: float, stale_reason: str, now_ns: int,
              table_viscosity_m2_s: tuple[float, float] | None = None,
-             extra: Sequence[tuple[str, float | int | str]] = (), note: str = ''
-             ) -> DiagnosticSnapshot:
+             extra: Sequence[tuple[str, float | int | str]] = (), note: str = '',
+             at_last_status: Mapping[str, int] | None = None) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -73,6 +76,11 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         More key-values, after the counters (the baseline file's, `BaselineStore.diagnostics`).
     note : str
         Appended to the message after ``; `` when not empty (e.g. the baseline file not used).
+    at_last_status : mapping of str to int, optional
+        The counters at the previous status (None or empty: the start). While STALE, the
+        message says why from what grew since: the stale skips' reason if they grew, and
+        the rejections that grew (non-finite, out-of-order samples...), so a reason of long
+        ago is not repeated while the samples are now rejected for another.
 
     Returns
     -------
@@ -85,12 +93,12 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
     if est is None or age_s > stale_timeout_s:
         level = STALE
-        message = f'stale: {stale_reason}' if est is None or counts['stale_skips'] \
-            else 'stale: no shaft speed'
+        message = 'stale: ' + _stale_why(est, counts, at_last_status or {}, stale_reason)
     else:
         level = mon.level
         message = level_message(level, mon)
-    flags = 0 if est is None else est.table_flags & ~NOT_FINITE
+    # the table flags are the latest estimate's: not said of an estimate gone stale
+    flags = 0 if est is None or level == STALE else est.table_flags & ~NOT_FINITE
     if est is not None and flags & VISCOSITY_CLAMPED and table_viscosity_m2_s is not None:
         low, high = (m2_s_to_cst(v) for v in table_viscosity_m2_s)
         message += (f'; oil viscosity {m2_s_to_cst(est.viscosity_m2_s):.4g} cSt outside the '
@@ -163,6 +171,20 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     values += [(name, counts[name]) for name in COUNTERS]
     values += extra
     return DiagnosticSnapshot(level, message, [(k, format_value(v)) for k, v in values])
+
+
+def _stale_why(last: Estimate | None, counts: Mapping[str, int],
+               before: Mapping[str, int], stale_reason: str) -> str:
+    """Say why no estimate came lately: what the samples since the last status met."""
+    grown = {name: counts[name] - before.get(name, 0) for name in COUNTERS}
+    parts = [stale_reason] if grown['stale_skips'] else []
+    rejected = [f'{name} {grown[name]}' for name in _REJECTIONS if grown[name]]
+    if rejected:
+        parts.append(f'samples rejected since the last status ({", ".join(rejected)})')
+    if parts:
+        return '; '.join(parts)
+    # nothing came since the last status: as of the last skip, or nothing triggers one
+    return stale_reason if last is None or counts['stale_skips'] else 'no shaft speed'
 
 
 def level_message(level: int, mon: WearMonitor) -> str:

@@ -178,6 +178,7 @@ class TorqueEstimator:
         self.settled.reset()
         self.last: Estimate | None = None
         self.last_stale_reason = 'no input yet'
+        self._counts_at_status: dict[str, int] = {}  # at the last diagnostics(): what grew
         self.reset_monitor()
 
     def reset_monitor(self) -> None:
@@ -252,9 +253,8 @@ class TorqueEstimator:
         """
         Take many input messages at once: exactly `on_input` (or `on_defect`) for each.
 
-        The replay's path (``chunk_path.estimate_chunk``): the same estimates, counters and
-        state as the per-message calls, made with whole-array arithmetic where nothing
-        depends on the order.
+        The replay's path (``chunk_path.estimate_chunk``): the per-message calls' estimates,
+        counters and state, in whole-array arithmetic where nothing depends on the order.
 
         Parameters
         ----------
@@ -313,8 +313,7 @@ class TorqueEstimator:
         self._accept(self._port_b, stamp_ns, value, MAX_PRESSURE_PA)
 
     def _on_temperature(self, stamp_ns: int, value: float, _: object) -> None:
-        if math.isfinite(value) and not (
-                TEMPERATURE_RANGE_C[0] <= value <= TEMPERATURE_RANGE_C[1]):
+        if math.isfinite(value) and not TEMPERATURE_RANGE_C[0] <= value <= TEMPERATURE_RANGE_C[1]:
             self.counts['rejected_out_of_range'] += 1
             return
         self._accept(self._temperature, stamp_ns, value, math.inf)
@@ -447,7 +446,7 @@ class TorqueEstimator:
 
     def diagnostics(self, now_ns: int) -> DiagnosticSnapshot:
         """
-        Status for /diagnostics at time ``now_ns`` (see ``diagnostics.snapshot``).
+        Status for /diagnostics at ``now_ns``; keeps the counters for the next one's message.
 
         Parameters
         ----------
@@ -457,15 +456,16 @@ class TorqueEstimator:
         Returns
         -------
         DiagnosticSnapshot
-            Level, message and key-values.
+            Level, message and key-values (see ``diagnostics.snapshot``).
 
         """
         axis = self.table.viscosity_axis_m2_s
         extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
         note = '; '.join(x for x in (note, self.monitor.oil_note) if x)
+        previous, self._counts_at_status = self._counts_at_status, dict(self.counts)
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
                         self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
-                        extra, note)
+                        extra, note, previous)
 
 
 def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:

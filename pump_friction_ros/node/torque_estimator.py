@@ -297,6 +297,41 @@ class TorqueEstimatorNode(Node):
         return response
 
 
+def _spin(executor: SingleThreadedExecutor, node: Node) -> None:
+    """
+    Execute callbacks until shutdown, as ``Executor.spin`` does, surviving a callback's error.
+
+    Any peer can send a request that makes one of rclpy's own callbacks raise: Jazzy's
+    parameter service builds ``Parameter.from_parameter_msg`` outside its ``try``
+    (``rclpy/parameter_service.py``), so a ``ParameterValue`` of an unknown type raises
+    ``ValueError`` out of ``spin_once``, and ``Executor.spin`` would end the node. Here that
+    request is dropped (its client gets no response), the error is logged with a count, and
+    the node goes on. A shutdown (the context no longer ok) still ends the loop.
+
+    Parameters
+    ----------
+    executor : SingleThreadedExecutor
+        The executor the node was added to.
+    node : Node
+        The node, for its logger.
+
+    """
+    failures = 0
+    while executor.context.ok():
+        try:
+            executor.spin_once()
+        except ExternalShutdownException:
+            raise
+        except Exception as exc:
+            if not executor.context.ok():
+                raise  # the shutdown's own error: run() tells it from a real one
+            failures += 1
+            why = ' '.join(str(exc).split()) or 'no message'
+            node.get_logger().error(
+                f'a callback raised {type(exc).__name__}: {why}; what it was handling is '
+                f'dropped and the node goes on ({failures} such error(s) so far)')
+
+
 def run(args: list[str] | None, stop: StopSignals) -> int:
     """
     Run the node until a stop signal or a shutdown; ``stop`` is already installed.
@@ -336,7 +371,7 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
         if not stop.received:  # else a signal came before rclpy's handler was there
             node = TorqueEstimatorNode()
             executor.add_node(node)
-            executor.spin()
+            _spin(executor, node)
     except PumpFrictionError as exc:
         print(f'{NODE_NAME}: cannot start: {exc}', file=sys.stderr)
         refused = True  # that line is the whole story: no 'stopping on' after it
