@@ -334,6 +334,41 @@ def test_storage_can_be_chosen_and_csv_and_plots_are_written(tmp_path, bags, tab
     assert not list(tmp_path.glob('.*partial*'))
 
 
+def _with_first_message_earlier(src, dst, earlier_ns):
+    """Copy a bag, its first message logged ``earlier_ns`` before the rest (a gap in the log)."""
+    from rosbags.rosbag2 import Writer
+
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(src) as reader, Writer(dst, version=9) as writer:
+        conns = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=ts)
+                 for c in reader.connections}
+        for i, (conn, log_ns, raw) in enumerate(reader.messages()):
+            writer.write(conns[conn.id], log_ns - (earlier_ns if i == 0 else 0), raw)
+
+
+def test_a_day_long_gap_in_the_log_writes_a_few_stale_ticks_not_one_per_second(tmp_path, bags,
+                                                                             table):
+    """A message logged a day early: the replay ends, the gap's ticks are three, it says so."""
+    day_ns = 86_400 * 10**9
+    gapped = tmp_path / 'gapped'
+    _with_first_message_earlier(bags['wear'], gapped, day_ns)
+    summary = replay_bag(gapped, CONFIG, out_bag=tmp_path / 'out', core=core_for(table))
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    with Reader(tmp_path / 'out') as reader:
+        diag = [(log_ns, ts.deserialize_cdr(raw, 'diagnostic_msgs/msg/DiagnosticArray'))
+                for conn, log_ns, raw in reader.messages() if conn.topic == '/diagnostics']
+    start = min(log_ns for log_ns, _ in diag) - 10**9  # the first tick is 1 s after the start
+    # the rest begins at the first message's own time, a tick's: the gap's last is there
+    in_gap = [(log_ns, msg) for log_ns, msg in diag if log_ns <= start + day_ns]
+    # up to STALE (stale_timeout_s 0.5 s + 2 periods), then the last before the data
+    assert [log_ns - start for log_ns, _ in in_gap] == [10**9, 2 * 10**9, day_ns]
+    assert all(msg.status[0].message.startswith('stale') for _, msg in in_gap[1:])
+    after = len(diag) - len(in_gap)
+    assert 11 <= after <= 12  # the 12 s of data at 1 Hz, as without the gap
+    assert summary.diagnostics_gaps == [86_400 - 3]  # 86,400 ticks in the gap, 3 written
+    assert 'gaps in the log: 1, in which 86397 ticks' in summary.formatted()
+
+
 def _write_bag(path, topics, storage='sqlite3', count=5):
     ts = get_typestore(Stores.ROS2_JAZZY)
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3

@@ -20,11 +20,16 @@ once (``TorqueEstimator.on_chunk``, identical to the node's ``on_input`` per mes
 that at each tick the core is exactly in the state the node's would be in; the timer is
 emulated on bag time (first tick one period after the first message). `replay_events` is the
 same, one event at a time.
+
+Across a gap in the log (a recording paused, clocks of another epoch), the node would repeat
+one STALE status every period; the ticks are written until the status has turned STALE
+(``stale_timeout_s`` and two periods after the last message), then only the last before the
+next message: a day's gap is three ticks, not 86,400 (a 1970 stamp, 1.7e9).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from typing import NamedTuple
 
 import numpy as np
@@ -53,7 +58,8 @@ class ReplayBatch(NamedTuple):
 
 
 def replay_batches(source: Source, core: TorqueEstimator, tick_period_ns: int | None = None,
-                   progress: Callable[[float], None] | None = None) -> Iterator[ReplayBatch]:
+                   progress: Callable[[float], None] | None = None,
+                   gaps: list[int] | None = None) -> Iterator[ReplayBatch]:
     """
     Run a bag's input events through the core, in bag order, a batch of estimates at a time.
 
@@ -71,6 +77,8 @@ def replay_batches(source: Source, core: TorqueEstimator, tick_period_ns: int | 
         Period of the node's diagnostics timer [ns]; None: no ticks.
     progress : callable, optional
         Called with the fraction of messages done after each chunk.
+    gaps : list of int, optional
+        Appended, for each gap in the log whose ticks were left out, how many were.
 
     Yields
     ------
@@ -80,6 +88,8 @@ def replay_batches(source: Source, core: TorqueEstimator, tick_period_ns: int | 
     """
     meta = source.meta
     next_tick = meta.start_ns + tick_period_ns if tick_period_ns else _NEVER
+    quiet_ns = round(core.config.stale_timeout_s * 1e9) + 2 * (tick_period_ns or 0)
+    fed_ns = meta.start_ns  # the latest log time fed to the core
     total = max(meta.input_message_count, 1)
     done = 0
     for chunk in source.chunks():
@@ -98,18 +108,33 @@ def replay_batches(source: Source, core: TorqueEstimator, tick_period_ns: int | 
                     chunk.has_torque[part], chunk.defects[part])
                 if len(estimates):
                     yield ReplayBatch(log_times[part][positions].tolist(), estimates)
+                if reach is not None:
+                    fed_ns = max(fed_ns, int(reach[end - 1]))
                 start = end
             if start < n:
-                log_ns = int(log_times[start])
-                while next_tick <= log_ns:
-                    yield ReplayBatch([next_tick], None)
-                    next_tick += tick_period_ns  # type: ignore[operator]
+                next_tick = yield from _ticks(next_tick, int(log_times[start]), fed_ns,
+                                              tick_period_ns or 0, quiet_ns, gaps)
         done += n
         if progress is not None:
             progress(min(done / total, 1.0))
-    while next_tick <= meta.end_ns:
+    if tick_period_ns:
+        yield from _ticks(next_tick, meta.end_ns, fed_ns, tick_period_ns, quiet_ns, gaps)
+
+
+def _ticks(next_tick: int, until_ns: int, fed_ns: int, period_ns: int, quiet_ns: int,
+           gaps: list[int] | None) -> Generator[ReplayBatch, None, int]:
+    """Yield the timer's ticks up to ``until_ns``, a gap's quiet ones left out; the next."""
+    left_out = 0  # (without a period, next_tick is _NEVER: no tick)
+    while next_tick <= until_ns:
+        if next_tick > fed_ns + quiet_ns and until_ns - next_tick >= period_ns:
+            skip = (until_ns - next_tick) // period_ns  # to the last before until_ns
+            next_tick += skip * period_ns
+            left_out += skip
         yield ReplayBatch([next_tick], None)
-        next_tick += tick_period_ns  # type: ignore[operator]
+        next_tick += period_ns
+    if left_out and gaps is not None:
+        gaps.append(left_out)
+    return next_tick
 
 
 def replay_events(source: Source, core: TorqueEstimator, tick_period_ns: int | None = None,

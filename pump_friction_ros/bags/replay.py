@@ -100,6 +100,8 @@ class ReplaySummary:
     final_other_scale_std: float = math.nan
     attribution: str = ''  # what explains the torque at the end (the status message's words)
     elapsed_s: float = 0.0
+    # the diagnostics timer's ticks left out in each gap of the log (`events.replay_batches`)
+    diagnostics_gaps: list[int] = field(default_factory=list)
     outputs: dict[str, str] = field(default_factory=dict)
     error: str = ''
     estimates_list: list[Estimate] | None = None
@@ -160,6 +162,10 @@ class ReplaySummary:
                  f'{self.final_other_scale:.3f} +- {1.96 * self.final_other_scale_std:.3f} '
                  '(95 %)',
                  f'  replayed in {self.elapsed_s:.2f} s']
+        if self.diagnostics_gaps:
+            lines.insert(1, f'  gaps in the log: {len(self.diagnostics_gaps)}, in which '
+                         f'{sum(self.diagnostics_gaps)} ticks of /diagnostics are left out '
+                         '(the STALE status the node would repeat)')
         lines += [f'  {kind}: {path}' for kind, path in self.outputs.items()]
         return '\n'.join(lines)
 
@@ -421,7 +427,8 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     write = sink.write if sink is not None else None
     period = round(1e9 / config.diagnostics_rate_hz) if write is not None else None
     with ProgressBar(f'replay {Path(summary.bag).name}', enabled=progress) as bar:
-        for log_ns, estimates in replay_batches(source, core, period, bar):
+        for log_ns, estimates in replay_batches(source, core, period, bar,
+                                                summary.diagnostics_gaps):
             raise_if_interrupted()  # a Ctrl-C swallowed by a finaliser stops us here
             if estimates is None:  # the node's diagnostics timer
                 if write is not None:
