@@ -738,3 +738,30 @@ def test_replay_counts_exactly_what_the_nodes_conversion_counts(tmp_path, env, m
         'rejected_missing_joint', 'rejected_malformed', 'rejected_non_finite',
         'rejected_future_stamp'))
     assert [e.expected_nm for e in summary.estimates_list] == [e.expected_nm for e in made]
+
+
+FILE_SIZE_LIMITED = """
+import resource, signal, sys
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails, as on a full disk
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
+from pump_friction_ros.app.cli import main
+raise SystemExit(main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith('linux'), reason='RLIMIT_FSIZE as on Linux')
+def test_sample_bags_on_a_full_disk_give_one_line_and_leave_nothing(env, tmp_path):
+    out = tmp_path / 'bags'
+    assert cli(env, 'make-sample-bags', '--out', tmp_path / 'warm', '--duration-s', 1
+               ).returncode == 0  # the table cached first: only the bags meet the limit
+    proc = subprocess.run([sys.executable, '-c', FILE_SIZE_LIMITED, '200000', 'make-sample-bags',
+                           '--out', str(out), '--duration-s', '5'],
+                          capture_output=True, text=True, timeout=120, env=env, check=False)
+    refused(proc, 'cannot write the sample bag', 'eha_nominal')
+    assert not out.exists()
+
+
+@pytest.mark.skipif(not Path('/proc/version').is_file(), reason='needs /proc (Linux)')
+def test_reset_baseline_of_a_file_that_cannot_be_moved_says_so_not_moved(env):
+    """/proc/version is a file os.replace cannot move (ENOENT): before, 'moved to None', rc 0."""
+    refused(cli(env, 'reset-baseline', '/proc/version', '--force'), 'cannot move', 'aside')

@@ -130,6 +130,25 @@ def test_bad_arguments_exit_2_with_one_line_and_no_traceback(capsys, argv):
     assert 'Traceback' not in err
 
 
+@pytest.mark.parametrize('argv, named', [
+    (['replay', 'bags/eha_valve_plate_wear', '--baseline', ''], '--baseline'),  # not "none"
+    (['replay', ''], 'BAG'),  # not "every bag under here"
+    (['learn-baseline', 'bags/eha_nominal', '--baseline', '', '--out', 'x.yaml'], '--baseline'),
+    (['torque', '--speed-rpm', '1000', '--pressure-bar', '100', '--table', ''], '--table'),
+    (['make-sample-bags', '--out', ''], '--out'),  # not "here"
+    (['replay', 'bags/eha_nominal', '--dask', ''], '--dask'),  # not "locally"
+])
+def test_an_empty_path_or_address_is_refused_not_taken_as_none_or_here(capsys, tmp_path,
+                                                                       monkeypatch, argv,
+                                                                       named):
+    monkeypatch.chdir(tmp_path)  # nothing may be written here
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ''
+    assert err.strip() == (f'pump_friction: error: argument {named}: expected a value, got an '
+                           f'empty string (see pump_friction {argv[0]} --help)')
+    assert not any(tmp_path.iterdir())
+
+
 def test_every_parser_refuses_abbreviations():
     from pump_friction_ros.app.cli import build_parser
     parser = build_parser()

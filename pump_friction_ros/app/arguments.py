@@ -43,6 +43,14 @@ class Parser(argparse.ArgumentParser):
         """Raise `UsageError` instead of printing usage and exiting."""
         raise UsageError(f'{message} (see {self.prog} --help)')
 
+    def _get_value(self, action: argparse.Action, arg_string: str) -> Any:
+        # every value is a path, an address, a name or a number: an empty one is a mistake
+        # (an unset shell variable), never "none" (--baseline '') or "here" (replay '')
+        # (a sub-command's own strings pass through here too: its parser judges them)
+        if arg_string == '' and not isinstance(action, argparse._SubParsersAction):
+            raise argparse.ArgumentError(action, 'expected a value, got an empty string')
+        return super()._get_value(action, arg_string)
+
 
 def bounded_float(name: str, low: float, high: float) -> Callable[[str], float]:
     """

@@ -174,6 +174,9 @@ def cmd_reset_baseline(args: argparse.Namespace) -> int:
         if not args.force:
             raise BaselineError(f'{exc}; --force moves it aside all the same') from None
     archived = archive_baseline(path)
+    if archived is None:
+        raise BaselineError(f'baseline file not found: {path} (it went away before it was '
+                            'moved aside)')
     print(f'{path} moved to {archived}: the node learns a new baseline from its next start '
           '(a running node: call its ~/reset_monitor service instead, or it writes its '
           'state back)')

@@ -473,7 +473,10 @@ def archive_baseline(path: Path) -> Path | None:
         target = path.with_name(f'{path.name}.{stamp}-{n}.bak')
     try:
         os.replace(path, target)
-    except FileNotFoundError:
+    except FileNotFoundError as exc:
+        if path.exists():  # it is there, the rename cannot move it (a special file system)
+            raise OutputError(f'cannot move baseline file {path} aside: {exc.strerror}'
+                              ) from None
         return None
     except OSError as exc:
         raise OutputError(f'cannot move baseline file {path} aside: '

@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+import sqlite3
 from typing import Any
 
 import numpy as np
@@ -183,6 +184,8 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
         replay) and beside them (``eha_params.yaml``, for ``ros2 launch ... params_file:=``).
 
     """
+    from rosbags.rosbag2 import WriterError
+
     out_dir = Path(out_dir)
     targets = [out_dir / name for name in SAMPLE_BAGS] + [out_dir / SAMPLE_PARAMS_FILE]
     for target in targets:
@@ -199,10 +202,16 @@ def make_sample_bags(out_dir: str | Path, seed: int = 0, pump_file: str | None =
                                                           strict=True)):
             wear = wear_step(WEAR_START_S, WEAR_SCALE, WEAR_RAMP_S) if worn else None
             run = simulate_duty_cycle(table, cycle, seed=seed * 1000 + k, wear=wear)
-            write_run(run, staged.path, storage)
-            # the simulated installation's parameters travel with each bag (BAG_PARAMS_FILE)
-            (staged.path / BAG_PARAMS_FILE).write_text(text)
-        params.path.write_text(text)
+            try:  # a full disk: sqlite3's error, or the MCAP writer's OSError
+                write_run(run, staged.path, storage)
+                # the simulated installation's parameters travel with each bag
+                (staged.path / BAG_PARAMS_FILE).write_text(text)
+            except (OSError, sqlite3.Error, WriterError) as exc:
+                raise BagError(f'cannot write the sample bag {staged.target}: {exc}') from exc
+        try:
+            params.path.write_text(text)
+        except OSError as exc:
+            raise BagError(f'cannot write {params.target}: {exc}') from exc
         outputs.commit()
     except BaseException:
         outputs.discard()
