@@ -55,7 +55,7 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'pump_friction = pump_friction_ros.app.cli:main',
+            'pump_friction = pump_friction_ros.app.entry:main',
             'torque_estimator = pump_friction_ros.node.__main__:main',
             'measure_node_cpu = pump_friction_ros.node.measure_cpu:main',
         ],

@@ -765,3 +765,39 @@ def test_sample_bags_on_a_full_disk_give_one_line_and_leave_nothing(env, tmp_pat
 def test_reset_baseline_of_a_file_that_cannot_be_moved_says_so_not_moved(env):
     """/proc/version is a file os.replace cannot move (ENOENT): before, 'moved to None', rc 0."""
     refused(cli(env, 'reset-baseline', '/proc/version', '--force'), 'cannot move', 'aside')
+
+
+@pytest.mark.skipif(not Path('/proc/self/maps').exists(), reason='/proc maps (Linux)')
+@pytest.mark.parametrize('delay_s', [0.0, 0.02, 0.1])
+def test_a_ctrl_c_while_the_command_imports_its_modules_is_one_line_and_130(env, delay_s):
+    """
+    The console script's module (``app.entry``): numpy, scipy... imported after its try.
+
+    Once the imports are done (0.1 s, a warm cache) the command itself may be stopped: it
+    says so and exits 130, or (CPython, an interrupt it flagged unhandled in code an
+    extension ran) dies of SIGINT after the line, which a shell reads as 130 all the same.
+    """
+    import signal
+    import time
+
+    def as_in_a_terminal():
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+    proc = subprocess.Popen([sys.executable, '-m', 'pump_friction_ros.app.entry', 'replay',
+                             str(REPO / 'bags' / 'eha_nominal'), '--quiet'],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True, preexec_fn=as_in_a_terminal)
+    try:
+        end = time.monotonic() + 60  # numpy's core library maps once the imports are under way
+        while '_multiarray_umath' not in Path(f'/proc/{proc.pid}/maps').read_text():
+            assert proc.poll() is None and time.monotonic() < end, proc.communicate()
+            time.sleep(0.0005)
+        time.sleep(delay_s)
+        os.killpg(proc.pid, signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode in (130, -signal.SIGINT)
+    assert (err, out) == ('pump_friction: interrupted\n', '')

@@ -95,6 +95,31 @@ def test_learning_two_bags_is_learning_one_then_going_on_from_its_baseline(capsy
     assert a_b['created_utc'] == a['created_utc']  # the baseline began with the first bag
 
 
+@pytest.mark.parametrize('again', [NOMINAL, NOMINAL.parent / '..' / 'bags' / NOMINAL.name,
+                                   NOMINAL.parent])  # the folder holding it finds it again
+def test_the_same_bag_twice_is_refused_before_anything_is_learnt(capsys, tmp_path, again):
+    out = tmp_path / 'twice.yaml'
+    code, text, err = run(capsys, 'learn-baseline', NOMINAL, again, '--params', SAMPLE_PARAMS,
+                          '--out', out, '--quiet')
+    assert code == 2 and text == ''
+    assert err.startswith('pump_friction: error: bag given twice: ') and len(
+        err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_a_bag_that_begins_before_what_was_learnt_ends_is_learnt_with_a_note(capsys,
+                                                                             tmp_path):
+    """The two sample bags share their start (as runs in simulated time from 0 do)."""
+    text = learn(capsys, tmp_path / 'ab.yaml', NOMINAL, WEAR)
+    notes = [line for line in text.splitlines() if line.startswith('note: ')]
+    assert len(notes) == 1 and str(WEAR) in notes[0]
+    assert f'begins at {BAG_START_NS * 1e-9:.3f} s, before what was learnt ends' in notes[0]
+    then = learn(capsys, tmp_path / 'b.yaml', WEAR, extra=('--baseline', tmp_path / 'ab.yaml'))
+    assert 'before what was learnt ends (' + str(tmp_path / 'ab.yaml') in then
+    alone = learn(capsys, tmp_path / 'a.yaml', NOMINAL)
+    assert 'note: ' not in alone
+
+
 def test_replay_with_a_baseline_starts_the_monitor_from_it(capsys, tmp_path, monkeypatch):
     path = tmp_path / 'baseline.yaml'
     learn(capsys, path, NOMINAL)

@@ -346,8 +346,8 @@ def _with_first_message_earlier(src, dst, earlier_ns):
             writer.write(conns[conn.id], log_ns - (earlier_ns if i == 0 else 0), raw)
 
 
-def test_a_day_long_gap_in_the_log_writes_a_few_stale_ticks_not_one_per_second(tmp_path, bags,
-                                                                             table):
+def test_a_day_long_gap_in_the_log_writes_a_few_stale_ticks_not_one_per_second(
+        tmp_path, bags, table):
     """A message logged a day early: the replay ends, the gap's ticks are three, it says so."""
     day_ns = 86_400 * 10**9
     gapped = tmp_path / 'gapped'

@@ -81,7 +81,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
 
     """
     from .data_commands import bag_config, estimator_config
-    from ..bags.fleet import discover_bags
+    from ..bags.fleet import discover_bags, refuse_repeats
     from ..bags.reader import parse_remaps
     from ..bags.replay import replay_bag
     from ..core.baseline_file import (
@@ -104,10 +104,15 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
     config = estimator_config(args)
     remaps = parse_remaps(args.topic_remap)
     bags = discover_bags(args.bags)
+    refuse_repeats(bags)  # learnt twice, its running would weigh double
     document: dict[str, Any] | None = None
     source = Path(args.baseline) if args.baseline else None
     if source is not None:
         document = read_baseline(source)
+    # the time learnt up to: each bag should begin after it (header stamps, which the file
+    # holds, may lead the log times by max_stamp_lead_s)
+    learnt_until_ns = int(document['learnt'].get('last_stamp_ns') or 0) if document else 0
+    lead_ns = round(config.max_stamp_lead_s * 1e9)
     created = str(document.get('created_utc', '')) if document else ''
     origin = 'pump_friction learn-baseline ' + ' '.join(str(b.resolve()) for b in bags)
     reference: tuple[Path, dict[str, Any]] | None = None
@@ -128,6 +133,13 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         if document is not None:
             restore_baseline(core, document, source or bags[0])
         summary = replay_bag(bag, cfg, remaps=remaps, progress=not args.quiet, core=core)
+        if summary.span_ns[0] + lead_ns < learnt_until_ns:  # sim time from 0 each run, a
+            # copy of a bag: learnt from all the same (a simulation's runs are not repeats)
+            notes.append(f'note: {bag} begins at {summary.span_ns[0] * 1e-9:.3f} s, before '
+                         f'what was learnt ends ({source}: {learnt_until_ns * 1e-9:.3f} s); '
+                         'learnt from all the same: if it is a copy of running already '
+                         'learnt, that running weighs double')
+        learnt_until_ns = max(learnt_until_ns, summary.span_ns[1])
         document, source = baseline_document(core, created, origin), bag
         alarm = ('; WARN or ERROR while learning: is this bag healthy?'
                  if summary.warn_intervals or summary.error_intervals else '')

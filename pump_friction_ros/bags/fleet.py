@@ -53,7 +53,7 @@ from ..errors import BagError, PumpFrictionError, UsageError
 from ..staging import raise_if_interrupted, remove_empty_folders, sigint_held, sigterm_kept
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',
-           'plan_outputs', 'run_job', 'run_jobs']
+           'plan_outputs', 'refuse_repeats', 'run_job', 'run_jobs']
 
 
 def discover_bags(paths: list[str | Path]) -> list[Path]:
@@ -90,6 +90,35 @@ def discover_bags(paths: list[str | Path]) -> list[Path]:
     return bags
 
 
+def refuse_repeats(bags: list[Path]) -> list[Path]:
+    """
+    Refuse a bag given twice (by another path, a link, a folder holding it); resolve them.
+
+    Parameters
+    ----------
+    bags : list of Path
+        The bags (as found by `discover_bags`).
+
+    Returns
+    -------
+    list of Path
+        The bags, resolved.
+
+    Raises
+    ------
+    BagError
+        The same bag given twice.
+
+    """
+    resolved = [b.resolve() for b in bags]
+    seen: dict[Path, Path] = {}
+    for given, path in zip(bags, resolved, strict=True):
+        if path in seen:
+            raise BagError(f'bag given twice: {seen[path]} and {given}')
+        seen[path] = given
+    return resolved
+
+
 def output_names(bags: list[Path]) -> list[str]:
     """
     Return a unique output name per bag of a fleet.
@@ -114,12 +143,7 @@ def output_names(bags: list[Path]) -> list[str]:
         The same bag given twice.
 
     """
-    resolved = [b.resolve() for b in bags]
-    seen: dict[Path, Path] = {}
-    for given, path in zip(bags, resolved, strict=True):
-        if path in seen:
-            raise BagError(f'bag given twice: {seen[path]} and {given}')
-        seen[path] = given
+    resolved = refuse_repeats(bags)
     names = [p.name for p in resolved]
     if len(set(names)) == len(names):
         return names

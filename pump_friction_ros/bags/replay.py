@@ -86,6 +86,7 @@ class ReplaySummary:
     label: str = ''  # the bag's name in a fleet (unique; see ``fleet.output_names``)
     storage: str = ''
     duration_s: float = 0.0
+    span_ns: tuple[int, int] = (0, 0)  # log times of the first and the last message [ns]
     messages_read: dict[str, int] = field(default_factory=dict)
     estimates: int = 0
     published: int = 0
@@ -460,6 +461,7 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     levels.finish(last_stamp)
     stats = source.stats()
     summary.duration_s = (meta.end_ns - start_ns) * 1e-9
+    summary.span_ns = (start_ns, meta.end_ns)
     summary.messages_read = dict(stats.messages_read)
     summary.estimates = core.counts['estimates']
     summary.counts = dict(core.counts)
