@@ -369,6 +369,30 @@ def test_a_day_long_gap_in_the_log_writes_a_few_stale_ticks_not_one_per_second(
     assert 'gaps in the log: 1, in which 86397 ticks' in summary.formatted()
 
 
+def test_an_mcap_zeroed_in_the_middle_says_how_many_messages_it_did_not_give(
+        tmp_path, table, short_run):
+    """The reader stops at the damage without an error: the metadata counts what is lost."""
+    intact = write_run(short_run, tmp_path / 'intact', 'mcap', compress=False)
+    damaged = tmp_path / 'damaged'
+    shutil.copytree(intact, damaged)
+    (file,) = damaged.glob('*.mcap')
+    data = bytearray(file.read_bytes())
+    third = len(data) // 3
+    data[third:third + 5000] = bytes(5000)
+    file.write_bytes(bytes(data))
+    written = {'/joint_states': short_run.t_s.size, '/load_pressure': short_run.pressure_t_s.size}
+    whole = replay_bag(intact, CONFIG, core=core_for(table))
+    assert whole.messages_read == written and whole.unread == {}
+    assert 'unread' not in whole.formatted() + whole.skipped()
+    cut = replay_bag(damaged, CONFIG, core=core_for(table))
+    assert set(cut.unread) == set(written)  # both topics lose their messages after the damage
+    for topic, n in written.items():
+        assert cut.messages_read[topic] + cut.unread[topic] == n
+    assert sum(cut.messages_read.values()) < sum(written.values()) / 2
+    assert f"unread: /joint_states {cut.unread['/joint_states']}" in cut.formatted()
+    assert ', unread: ' in cut.skipped()
+
+
 def _write_bag(path, topics, storage='sqlite3', count=5):
     ts = get_typestore(Stores.ROS2_JAZZY)
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3

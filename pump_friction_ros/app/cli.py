@@ -447,9 +447,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     """
     sigint_kept()
-    parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = build_parser().parse_args(argv)  # building it imports: a Ctrl-C may come
         code = args.func(args)
         raise_if_interrupted()  # a Ctrl-C swallowed where nothing checked: still 130
         return code

@@ -167,6 +167,14 @@ class ReadStats:
 
     messages_read: dict[str, int] = field(default_factory=dict)
     fallbacks: int = 0
+    # messages per input topic that the bag's metadata counts (more than read: the storage
+    # ends early or is corrupt where rosbags stops without an error)
+    claimed: dict[str, int] = field(default_factory=dict)
+
+    def unread(self) -> dict[str, int]:
+        """Return the messages the metadata counts but the storage did not give, per topic."""
+        return {topic: n - self.messages_read.get(topic, 0) for topic, n in self.claimed.items()
+                if n > self.messages_read.get(topic, 0)}
 
 
 @dataclass
@@ -324,8 +332,11 @@ class BagInputs:
             Messages per input topic and messages decoded one by one by rosbags.
 
         """
+        claimed = dict.fromkeys(self.wanted, 0)
+        for conn in self.connections:
+            claimed[self._topic_of[conn.id]] += int(conn.msgcount or 0)
         return ReadStats(dict(self.messages_read),
-                         sum(d.fallbacks for d in self._decoders.values()))
+                         sum(d.fallbacks for d in self._decoders.values()), claimed)
 
     def chunks(self) -> Iterator[Chunk]:
         """

@@ -88,6 +88,7 @@ class ReplaySummary:
     duration_s: float = 0.0
     span_ns: tuple[int, int] = (0, 0)  # log times of the first and the last message [ns]
     messages_read: dict[str, int] = field(default_factory=dict)
+    unread: dict[str, int] = field(default_factory=dict)  # in the metadata, not the storage
     estimates: int = 0
     published: int = 0
     counts: dict[str, int] = field(default_factory=dict)
@@ -129,7 +130,24 @@ class ReplaySummary:
 
         """
         items = ', '.join(f'{k} {n}' for k in _SKIP_COUNTERS if (n := self.counts.get(k, 0)))
-        return f', skipped: {items}' if items else ''
+        unread = self.unread_note()
+        return (f', skipped: {items}' if items else '') + (f', {unread}' if unread else '')
+
+    def unread_note(self) -> str:
+        """
+        Say how many messages the metadata counts that the storage did not give.
+
+        Returns
+        -------
+        str
+            ``'unread: /joint_states 1828 (...)'``, or '' if none.
+
+        """
+        if not self.unread:
+            return ''
+        items = ', '.join(f'{topic} {n}' for topic, n in self.unread.items())
+        return (f'unread: {items} (counted in the metadata, not in the storage: truncated or '
+                'corrupt; the estimates are of what was read)')
 
     def formatted(self) -> str:
         """
@@ -163,6 +181,8 @@ class ReplaySummary:
                  f'{self.final_other_scale:.3f} +- {1.96 * self.final_other_scale_std:.3f} '
                  '(95 %)',
                  f'  replayed in {self.elapsed_s:.2f} s']
+        if self.unread:  # after the messages read
+            lines.insert(2, f'  {self.unread_note()}')
         if self.diagnostics_gaps:
             lines.insert(1, f'  gaps in the log: {len(self.diagnostics_gaps)}, in which '
                          f'{sum(self.diagnostics_gaps)} ticks of /diagnostics are left out '
@@ -463,6 +483,7 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     summary.duration_s = (meta.end_ns - start_ns) * 1e-9
     summary.span_ns = (start_ns, meta.end_ns)
     summary.messages_read = dict(stats.messages_read)
+    summary.unread = stats.unread()
     summary.estimates = core.counts['estimates']
     summary.counts = dict(core.counts)
     summary.decoded_one_by_one = stats.fallbacks
