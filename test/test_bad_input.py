@@ -801,3 +801,13 @@ def test_a_ctrl_c_while_the_command_imports_its_modules_is_one_line_and_130(env,
             proc.wait()
     assert proc.returncode in (130, -signal.SIGINT)
     assert (err, out) == ('pump_friction: interrupted\n', '')
+
+
+def test_a_sqlite_bag_with_a_timestamp_of_text_is_one_line_naming_the_bag(env, tmp_path):
+    import sqlite3
+
+    bag = write_bag(tmp_path / 'bag', n=200)
+    (db,) = bag.glob('*.db3')
+    with sqlite3.connect(db) as conn:
+        conn.execute("UPDATE messages SET timestamp = 'abc' WHERE id = 7")
+    refused(cli(env, 'replay', bag, '--quiet'), f'bag {bag}: unreadable (ValueError:')

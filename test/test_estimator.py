@@ -180,6 +180,17 @@ def test_a_stale_status_names_what_the_samples_meet_now_not_an_old_skip(table):
     assert 'rejected' not in snap.message
 
 
+def test_estimates_stamped_an_hour_behind_the_clock_are_stale_and_the_status_says_why(table):
+    est = make(table)
+    hour_ns = 3600 * 10**9
+    for i in range(10):  # the inputs' header stamps an hour behind the node's clock
+        est.on_input(K.LOAD_PRESSURE, i * 10**7, 100e5)
+        assert est.on_input(K.SHAFT_SPEED, i * 10**7 + 1, 300.0) is not None
+    snap = est.diagnostics(hour_ns)
+    assert snap.level == STALE
+    assert snap.message.startswith('stale: the latest estimate is stamped 3600 s before')
+
+
 def test_a_stale_status_does_not_repeat_the_old_estimates_table_flags(table):
     est = make(table)
     est.on_input(K.LOAD_PRESSURE, 0, 100e5)

@@ -39,9 +39,11 @@ from ..physics.units import (
     CC_TO_M3,
     cst_to_m2_s,
     MM_TO_M,
+    rad_s_to_rpm,
     rpm_to_rad_s,
 )
 from ..staging import raise_if_interrupted, sigint_ignored, sigint_kept, stop_signal
+from ..table.friction_table import TableSpec
 
 if TYPE_CHECKING:
     from ..table.friction_table import FrictionTable
@@ -190,7 +192,7 @@ def _cmd_torque(args: argparse.Namespace) -> int:
 def _cmd_build_table(args: argparse.Namespace) -> int:
     from ..progress import ProgressBar
     from ..staging import StagedOutputs
-    from ..table.friction_table import build_table, TableSpec
+    from ..table.friction_table import build_table
     from ..table.table_files import cached_table_path
 
     params = load_pump(args.pump)
@@ -315,7 +317,9 @@ def build_parser() -> argparse.ArgumentParser:
     _add_pump(p)
     p.add_argument('--out', metavar='FILE', default=None,
                    help='output .npz (default: the cache used when no table is given)')
-    p.add_argument('--max-speed-rpm', type=bounded_float('--max-speed-rpm', 100.0,
+    # above the finely resolved low-speed part of the axis (TableSpec.low_speed_rad_s)
+    lowest_rpm = float(math.ceil(rad_s_to_rpm(TableSpec.low_speed_rad_s)))
+    p.add_argument('--max-speed-rpm', type=bounded_float('--max-speed-rpm', lowest_rpm,
                                                          MAX_SPEED_RPM), default=12000.0,
                    metavar='N', help='speed envelope [rpm] (default 12000)')
     p.add_argument('--max-pressure-bar', type=bounded_float('--max-pressure-bar', 1.0,

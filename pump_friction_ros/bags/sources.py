@@ -170,11 +170,11 @@ def _reader_process(conn: Any, parent_end: Any, bag: str, config: EstimatorConfi
     except (BrokenPipeError, EOFError, OSError) as exc:
         if isinstance(exc, (BrokenPipeError, EOFError)):
             return  # the parent stopped listening: nothing more to do
-        _send_error(conn, f'{type(exc).__name__}: {exc}')
+        _send_error(conn, f'bag {bag}: {type(exc).__name__}: {exc}')
     except BagError as exc:
         _send_error(conn, str(exc))
-    except Exception as exc:
-        _send_error(conn, f'{type(exc).__name__}: {exc}')
+    except Exception as exc:  # e.g. a log time beyond int64, a sqlite timestamp of text
+        _send_error(conn, f'bag {bag}: unreadable ({type(exc).__name__}: {exc})')
     finally:
         conn.close()
 

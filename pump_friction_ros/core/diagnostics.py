@@ -93,7 +93,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
     if est is None or age_s > stale_timeout_s:
         level = STALE
-        message = 'stale: ' + _stale_why(est, counts, at_last_status or {}, stale_reason)
+        message = 'stale: ' + _stale_why(est, counts, at_last_status or {}, stale_reason,
+                                         age_s)
     else:
         level = mon.level
         message = level_message(level, mon)
@@ -174,9 +175,12 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
 
 
 def _stale_why(last: Estimate | None, counts: Mapping[str, int],
-               before: Mapping[str, int], stale_reason: str) -> str:
+               before: Mapping[str, int], stale_reason: str, age_s: float) -> str:
     """Say why no estimate came lately: what the samples since the last status met."""
     grown = {name: counts[name] - before.get(name, 0) for name in COUNTERS}
+    if grown['estimates'] and last is not None:  # made, but stamped long before now
+        return (f'the latest estimate is stamped {age_s:.4g} s before this clock: the header '
+                'stamps of the inputs are of another clock')
     parts = [stale_reason] if grown['stale_skips'] else []
     rejected = [f'{name} {grown[name]}' for name in _REJECTIONS if grown[name]]
     if rejected:
