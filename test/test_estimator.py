@@ -183,12 +183,29 @@ def test_a_stale_status_names_what_the_samples_meet_now_not_an_old_skip(table):
 def test_estimates_stamped_an_hour_behind_the_clock_are_stale_and_the_status_says_why(table):
     est = make(table)
     hour_ns = 3600 * 10**9
-    for i in range(10):  # the inputs' header stamps an hour behind the node's clock
-        est.on_input(K.LOAD_PRESSURE, i * 10**7, 100e5)
-        assert est.on_input(K.SHAFT_SPEED, i * 10**7 + 1, 300.0) is not None
-    snap = est.diagnostics(hour_ns)
+
+    def second(k):  # the inputs' header stamps an hour behind the node's clock, 1 kHz
+        for i in range(1000):
+            t_ns = k * 10**9 + i * 10**6
+            est.on_input(K.LOAD_PRESSURE, t_ns, 100e5)
+            assert est.on_input(K.SHAFT_SPEED, t_ns + 1, 300.0) is not None
+
+    second(0)
+    assert est.diagnostics(hour_ns + 10**9).level == STALE  # no earlier status to judge by
+    second(1)
+    snap = est.diagnostics(hour_ns + 2 * 10**9)
     assert snap.level == STALE
     assert snap.message.startswith('stale: the latest estimate is stamped 3600 s before')
+
+
+def test_inputs_that_stop_between_two_statuses_are_a_dropout_not_another_clock(table):
+    est = make(table)
+    assert est.diagnostics(0).level == STALE
+    for i in range(300):  # 0.3 s of inputs, then nothing
+        est.on_input(K.LOAD_PRESSURE, i * 10**6, 100e5)
+        assert est.on_input(K.SHAFT_SPEED, i * 10**6 + 1, 300.0) is not None
+    snap = est.diagnostics(10**9)  # the latest estimate 0.7 s old > stale_timeout_s 0.5 s
+    assert snap.level == STALE and snap.message == 'stale: no shaft speed'
 
 
 def test_a_stale_status_does_not_repeat_the_old_estimates_table_flags(table):

@@ -369,6 +369,32 @@ def test_a_day_long_gap_in_the_log_writes_a_few_stale_ticks_not_one_per_second(
     assert 'gaps in the log: 1, in which 86397 ticks' in summary.formatted()
 
 
+def test_a_gap_after_stamps_that_lead_the_log_still_writes_the_status_turning_stale(
+        tmp_path, bags, table):
+    """Header stamps 0.9 s ahead of the log (within max_stamp_lead_s), 10 Hz status, 60 s gap."""
+    ts = get_typestore(Stores.ROS2_JAZZY)
+    src, led = bags['wear'], tmp_path / 'led'
+    with Reader(src) as reader, Writer(led, version=9) as writer:
+        conns = {c.id: writer.add_connection(c.topic, c.msgtype, typestore=ts)
+                 for c in reader.connections}
+        first = reader.start_time
+        for conn, log_ns, raw in reader.messages():
+            later = 60 * 10**9 if log_ns - first > 6 * 10**9 else 0  # the gap after 6 s
+            writer.write(conns[conn.id], log_ns - 900_000_000 + later, raw)
+    config = dataclasses.replace(CONFIG, diagnostics_rate_hz=10.0)
+    replay_bag(led, config, out_bag=tmp_path / 'out', core=core_for(table, config))
+    with Reader(tmp_path / 'out') as reader:
+        diag = [(log_ns, ts.deserialize_cdr(raw, 'diagnostic_msgs/msg/DiagnosticArray')
+                 .status[0].message) for conn, log_ns, raw in reader.messages()
+                if conn.topic == '/diagnostics']
+    gap_start, gap_end = first + 6 * 10**9 - 900_000_000, first + 66 * 10**9 - 900_000_000
+    in_gap = [message for log_ns, message in diag if gap_start < log_ns < gap_end]
+    # as the node: OK while the last estimate (stamped 0.9 s ahead) is younger than
+    # stale_timeout_s, then STALE, written before the gap's ticks are left out
+    assert not in_gap[0].startswith('stale') and in_gap[-1].startswith('stale')
+    assert sum(m.startswith('stale') for m in in_gap) >= 2
+
+
 def test_an_mcap_zeroed_in_the_middle_says_how_many_messages_it_did_not_give(
         tmp_path, table, short_run):
     """The reader stops at the damage without an error: the metadata counts what is lost."""

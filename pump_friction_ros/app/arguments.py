@@ -47,7 +47,8 @@ class Parser(argparse.ArgumentParser):
         # every value is a path, an address, a name or a number: an empty one is a mistake
         # (an unset shell variable), never "none" (--baseline '') or "here" (replay '')
         # (a sub-command's own strings pass through here too: its parser judges them)
-        if arg_string == '' and not isinstance(action, argparse._SubParsersAction):
+        if arg_string == '' and action.default != '' and not isinstance(
+                action, argparse._SubParsersAction):
             raise argparse.ArgumentError(action, 'expected a value, got an empty string')
         return super()._get_value(action, arg_string)
 

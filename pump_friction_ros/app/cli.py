@@ -450,9 +450,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         on SIGTERM.
 
     """
-    sigint_kept()
     try:
-        args = build_parser().parse_args(argv)  # building it imports: a Ctrl-C may come
+        sigint_kept()  # in the try: a Ctrl-C from here on is one line (entry: before)
+        args = build_parser().parse_args(argv)
         code = args.func(args)
         raise_if_interrupted()  # a Ctrl-C swallowed where nothing checked: still 130
         return code

@@ -23,8 +23,9 @@ same, one event at a time.
 
 Across a gap in the log (a recording paused, clocks of another epoch), the node would repeat
 one STALE status every period; the ticks are written until the status has turned STALE
-(``stale_timeout_s`` and two periods after the last message), then only the last before the
-next message: a day's gap is three ticks, not 86,400 (a 1970 stamp, 1.7e9).
+(``stale_timeout_s`` and two periods after the last message, or after the last estimate's
+stamp where it leads), then only the last before the next message: a day's gap is three
+ticks, not 86,400 (a 1970 stamp, 1.7e9).
 """
 
 from __future__ import annotations
@@ -112,13 +113,21 @@ def replay_batches(source: Source, core: TorqueEstimator, tick_period_ns: int | 
                     fed_ns = max(fed_ns, int(reach[end - 1]))
                 start = end
             if start < n:
-                next_tick = yield from _ticks(next_tick, int(log_times[start]), fed_ns,
-                                              tick_period_ns or 0, quiet_ns, gaps)
+                next_tick = yield from _ticks(next_tick, int(log_times[start]),
+                                              _quiet_from(fed_ns, core), tick_period_ns or 0,
+                                              quiet_ns, gaps)
         done += n
         if progress is not None:
             progress(min(done / total, 1.0))
     if tick_period_ns:
-        yield from _ticks(next_tick, meta.end_ns, fed_ns, tick_period_ns, quiet_ns, gaps)
+        yield from _ticks(next_tick, meta.end_ns, _quiet_from(fed_ns, core), tick_period_ns,
+                          quiet_ns, gaps)
+
+
+def _quiet_from(fed_ns: int, core: TorqueEstimator) -> int:
+    """Return when the quiet began: the last log time fed, or a later stamp (a lead)."""
+    last = core.last  # its stamp may lead the log time by up to max_stamp_lead_s
+    return fed_ns if last is None else max(fed_ns, last.stamp_ns)
 
 
 def _ticks(next_tick: int, until_ns: int, fed_ns: int, period_ns: int, quiet_ns: int,

@@ -50,7 +50,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
              stale_timeout_s: float, stale_reason: str, now_ns: int,
              table_viscosity_m2_s: tuple[float, float] | None = None,
              extra: Sequence[tuple[str, float | int | str]] = (), note: str = '',
-             at_last_status: Mapping[str, int] | None = None) -> DiagnosticSnapshot:
+             at_last_status: tuple[int, Mapping[str, int]] | None = None
+             ) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
 
@@ -76,11 +77,13 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         More key-values, after the counters (the baseline file's, `BaselineStore.diagnostics`).
     note : str
         Appended to the message after ``; `` when not empty (e.g. the baseline file not used).
-    at_last_status : mapping of str to int, optional
-        The counters at the previous status (None or empty: the start). While STALE, the
-        message says why from what grew since: the stale skips' reason if they grew, and
-        the rejections that grew (non-finite, out-of-order samples...), so a reason of long
-        ago is not repeated while the samples are now rejected for another.
+    at_last_status : tuple of (int, mapping of str to int), optional
+        The time [ns] and the counters of the previous status (None: there was none). While
+        STALE, the message says why from what grew since: the stale skips' reason if they
+        grew, the rejections that grew (non-finite, out-of-order samples...), so a reason of
+        long ago is not repeated while the samples are now rejected for another; or, when
+        estimates were made since but stamped older than the previous status by more than
+        ``stale_timeout_s``, that their stamps are of another clock.
 
     Returns
     -------
@@ -93,8 +96,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
     if est is None or age_s > stale_timeout_s:
         level = STALE
-        message = 'stale: ' + _stale_why(est, counts, at_last_status or {}, stale_reason,
-                                         age_s)
+        message = 'stale: ' + _stale_why(est, counts, at_last_status, stale_reason, age_s,
+                                         round(stale_timeout_s * 1e9))
     else:
         level = mon.level
         message = level_message(level, mon)
@@ -175,10 +178,14 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
 
 
 def _stale_why(last: Estimate | None, counts: Mapping[str, int],
-               before: Mapping[str, int], stale_reason: str, age_s: float) -> str:
+               at_last_status: tuple[int, Mapping[str, int]] | None, stale_reason: str,
+               age_s: float, timeout_ns: int) -> str:
     """Say why no estimate came lately: what the samples since the last status met."""
+    before = at_last_status[1] if at_last_status is not None else {}
     grown = {name: counts[name] - before.get(name, 0) for name in COUNTERS}
-    if grown['estimates'] and last is not None:  # made, but stamped long before now
+    if grown['estimates'] and last is not None and at_last_status is not None and \
+            last.stamp_ns + timeout_ns < at_last_status[0]:
+        # made since the last status, yet stamped stale already then: not a dropout
         return (f'the latest estimate is stamped {age_s:.4g} s before this clock: the header '
                 'stamps of the inputs are of another clock')
     parts = [stale_reason] if grown['stale_skips'] else []

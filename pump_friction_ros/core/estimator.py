@@ -178,7 +178,7 @@ class TorqueEstimator:
         self.settled.reset()
         self.last: Estimate | None = None
         self.last_stale_reason = 'no input yet'
-        self._counts_at_status: dict[str, int] = {}  # at the last diagnostics(): what grew
+        self._at_status: tuple[int, dict[str, int]] | None = None  # last diagnostics()'s
         self.reset_monitor()
 
     def reset_monitor(self) -> None:
@@ -462,7 +462,7 @@ class TorqueEstimator:
         axis = self.table.viscosity_axis_m2_s
         extra, note = self.baseline.diagnostics() if self.baseline is not None else ([], '')
         note = '; '.join(x for x in (note, self.monitor.oil_note) if x)
-        previous, self._counts_at_status = self._counts_at_status, dict(self.counts)
+        previous, self._at_status = self._at_status, (now_ns, dict(self.counts))
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
                         self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
                         extra, note, previous)

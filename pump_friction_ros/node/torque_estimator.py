@@ -25,8 +25,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 import math
+from pathlib import Path
 import sys
 import time
+import traceback
 from typing import Any
 
 from builtin_interfaces.msg import Time
@@ -299,14 +301,16 @@ class TorqueEstimatorNode(Node):
 
 def _spin(executor: SingleThreadedExecutor, node: Node) -> None:
     """
-    Execute callbacks until shutdown, as ``Executor.spin`` does, surviving a callback's error.
+    Execute callbacks until the context shuts down, surviving a callback's error.
 
     Any peer can send a request that makes one of rclpy's own callbacks raise: Jazzy's
     parameter service builds ``Parameter.from_parameter_msg`` outside its ``try``
     (``rclpy/parameter_service.py``), so a ``ParameterValue`` of an unknown type raises
     ``ValueError`` out of ``spin_once``, and ``Executor.spin`` would end the node. Here that
-    request is dropped (its client gets no response), the error is logged with a count, and
-    the node goes on. A shutdown (the context no longer ok) still ends the loop.
+    request is dropped (its client gets no response) and the node goes on. The error is
+    logged the 1st, 2nd, 4th, 8th... time, with where it was raised and the count, so a
+    peer repeating it cannot flood the log. A shutdown (the context no longer ok, a signal
+    waking the wait) still ends the loop.
 
     Parameters
     ----------
@@ -326,10 +330,14 @@ def _spin(executor: SingleThreadedExecutor, node: Node) -> None:
             if not executor.context.ok():
                 raise  # the shutdown's own error: run() tells it from a real one
             failures += 1
+            if failures & (failures - 1):  # logged at 1, 2, 4, 8...
+                continue
             why = ' '.join(str(exc).split()) or 'no message'
+            frames = traceback.extract_tb(exc.__traceback__)
+            where = f' at {Path(frames[-1].filename).name}:{frames[-1].lineno}' if frames else ''
             node.get_logger().error(
-                f'a callback raised {type(exc).__name__}: {why}; what it was handling is '
-                f'dropped and the node goes on ({failures} such error(s) so far)')
+                f'a callback raised {type(exc).__name__}{where}: {why}; what it was handling '
+                f'is dropped and the node goes on ({failures} such error(s) so far)')
 
 
 def run(args: list[str] | None, stop: StopSignals) -> int:
