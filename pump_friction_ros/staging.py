@@ -26,7 +26,7 @@ Errors are one line naming the target, never a temporary name.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 import os
 from pathlib import Path
@@ -38,7 +38,8 @@ import threading
 from types import FrameType
 from typing import Any
 
-from .errors import OutputError
+from .errors import OutputError, UsageError
+from .input_files import special_kind
 
 __all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
            'looks_like_plots', 'raise_if_interrupted', 'remove_empty_folders', 'sigint_held',
@@ -265,6 +266,36 @@ def _make_folder(folder: Path, target: Path) -> list[Path]:
     return made
 
 
+def refuse_at_inputs(flag: str, target: str | Path, inputs: Iterable[str | Path]) -> None:
+    """
+    Refuse an output at an input, inside one (a bag's folder) or around one.
+
+    ``--force`` would otherwise replace the data the command reads: a bag's
+    ``metadata.yaml``, a bench CSV, or a folder holding them.
+
+    Parameters
+    ----------
+    flag : str
+        The output's option, for the message (``--out``).
+    target : str or Path
+        The output.
+    inputs : iterable of str or Path
+        The command's input files and bags.
+
+    Raises
+    ------
+    UsageError
+        ``target`` is an input, is in one, or holds one.
+
+    """
+    where = Path(target).expanduser().resolve()
+    for given in inputs:
+        source = Path(given).expanduser().resolve()
+        if where == source or source in where.parents or where in source.parents:
+            raise UsageError(f'{flag} {target}: an output cannot be at, in or around the '
+                             f'input {given}')
+
+
 class Staged:
     """
     An output path written under a temporary name and moved into place by `commit`.
@@ -304,6 +335,10 @@ class Staged:
             if not force:
                 raise OutputError(f'output exists: {target} (remove it, choose another path, '
                                   'or pass --force)')
+            special = special_kind(where)
+            if special:  # /dev/null, a named pipe: never replaced by a file
+                raise OutputError(f'output {target} is {special}, not a '
+                                  f'{"folder" if is_dir else "regular file"}: not replaced')
             if where.is_dir() != is_dir:
                 want, found = ('a folder', 'a file') if is_dir else ('a file', 'a folder')
                 raise OutputError(f'output {target} is {found}, expected {want}: not '

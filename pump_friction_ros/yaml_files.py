@@ -26,6 +26,7 @@ import numpy as np
 import yaml
 
 from .errors import ConfigError
+from .input_files import read_regular, YAML_LIMIT_BYTES
 
 __all__ = ['SafeDumper', 'number_as_float', 'read_yaml']
 
@@ -166,14 +167,15 @@ def read_yaml(path: Path, what: str, ros_numbers: bool = True,
     Raises
     ------
     ConfigError
-        The file is missing or unreadable, is not valid YAML (with the line and column), or
+        The file is missing or unreadable (not a regular file: a named pipe, a device; or
+        larger than `YAML_LIMIT_BYTES`), is not valid YAML (with the line and column), or
         holds a number of thousands of digits or nesting too deep to parse, or (with
         ``unique_keys``) gives a key twice.
 
     """
     try:
-        return yaml.load(path.read_text(encoding='utf-8'),
-                         Loader=_LOADERS[ros_numbers, unique_keys])
+        text = read_regular(path, YAML_LIMIT_BYTES).decode('utf-8')
+        return yaml.load(text, Loader=_LOADERS[ros_numbers, unique_keys])
     except FileNotFoundError:
         raise ConfigError(f'{what} not found: {path}') from None
     except (OSError, UnicodeDecodeError) as exc:

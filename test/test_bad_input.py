@@ -99,14 +99,16 @@ JOINT = 'sensor_msgs/msg/JointState'
 PRESSURE = 'sensor_msgs/msg/FluidPressure'
 
 
-def write_bag(path, n=2000, joint=None, pressure=None, extra=(), storage='sqlite3'):
+def write_bag(path, n=2000, joint=None, pressure=None, extra=(), storage='sqlite3',
+              extra_first=False):
     """
     Write a bag of ``n`` joint states at 1 kHz and pressure at 500 Hz, log time = stamp.
 
     ``joint(k, fields)`` may change the fields of joint state k (``name``, ``velocity``,
     ``effort``, ``stamp_ns``) or return raw bytes to write instead; ``pressure(k, fields)``
     likewise (``fluid_pressure``, ``stamp_ns``); returning None drops the message.
-    ``extra`` lists (topic, msgtype, count) of std_msgs/Float64 topics to add.
+    ``extra`` lists (topic, msgtype, count) of std_msgs/Float64 topics to add, after the
+    inputs' connections or, with ``extra_first``, before them.
     """
     import numpy as np
     from rosbags.rosbag2 import StoragePlugin, Writer
@@ -120,7 +122,17 @@ def write_bag(path, n=2000, joint=None, pressure=None, extra=(), storage='sqlite
             sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000), frame_id='')
 
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+
+    def add_extra(writer):
+        for topic, msgtype, count in extra:
+            conn = writer.add_connection(topic, msgtype, typestore=ts)
+            for k in range(count):
+                writer.write(conn, T0 + k * 1_000_000,
+                             ts.serialize_cdr(t[msgtype](data=float(k)), msgtype))
+
     with Writer(path, version=9, storage_plugin=plugin) as writer:
+        if extra_first:
+            add_extra(writer)
         jc = writer.add_connection('/joint_states', JOINT, typestore=ts)
         pc = writer.add_connection('/load_pressure', PRESSURE, typestore=ts)
         for k in range(n):
@@ -146,11 +158,8 @@ def write_bag(path, n=2000, joint=None, pressure=None, extra=(), storage='sqlite
                                position=np.zeros(0), velocity=np.array(fields['velocity']),
                                effort=np.array(fields['effort']))
                 writer.write(jc, log, ts.serialize_cdr(msg, JOINT))
-        for topic, msgtype, count in extra:
-            conn = writer.add_connection(topic, msgtype, typestore=ts)
-            for k in range(count):
-                writer.write(conn, T0 + k * 1_000_000,
-                             ts.serialize_cdr(t[msgtype](data=float(k)), msgtype))
+        if not extra_first:
+            add_extra(writer)
     return path
 
 
@@ -258,6 +267,45 @@ def test_a_fleet_and_learn_baseline_say_what_each_bag_skipped(env, tmp_path):
     assert ' monitored samples, skipped: rejected_non_finite 200' in proc.stdout, proc.stdout
 
 
+@pytest.mark.parametrize('first', [True, False])
+def test_another_type_on_an_input_topic_is_not_read_and_is_reported(env, tmp_path, first):
+    clean = write_bag(tmp_path / 'clean', n=1000)
+    mixed = write_bag(tmp_path / 'mixed', n=1000, extra_first=first,
+                      extra=[('/load_pressure', 'std_msgs/msg/Float64', 999)])
+    runs = [cli(env, 'replay', bag, '--csv', tmp_path / f'{bag.name}.csv')
+            for bag in (clean, mixed)]
+    assert all(proc.returncode == 0 for proc in runs), runs[1].stderr
+    assert estimates_of(runs[0].stdout) == estimates_of(runs[1].stdout) > 0
+    # the node's FluidPressure subscription never receives the Float64s: the same outputs
+    assert (tmp_path / 'clean.csv').read_text() == (tmp_path / 'mixed.csv').read_text()
+    assert 'not read, of another type: /load_pressure (std_msgs/msg/Float64) 999' \
+        in runs[1].stdout
+    assert 'of another type' not in runs[0].stdout
+
+
+@pytest.mark.parametrize('storage', ['sqlite3', 'mcap'])
+@pytest.mark.parametrize('shift_s, stretch_s', [(-1000, 0), (0, 500), (10**9, 0)])
+def test_the_time_span_comes_from_the_storage_not_an_edited_metadata_file(
+        env, tmp_path, storage, shift_s, stretch_s):
+    import yaml
+    bags = [write_bag(tmp_path / name, n=1000, storage=storage) for name in ('true', 'edited')]
+    meta_file = bags[1] / 'metadata.yaml'
+    meta = yaml.safe_load(meta_file.read_text())
+    info = meta['rosbag2_bagfile_information']
+    info['starting_time']['nanoseconds_since_epoch'] += shift_s * 10**9
+    info['duration']['nanoseconds'] += stretch_s * 10**9
+    meta_file.write_text(yaml.safe_dump(meta))
+    runs = [cli(env, 'replay', bag, '--csv', tmp_path / f'{bag.name}.csv', '--out',
+                tmp_path / f'{bag.name}_out') for bag in bags]
+    assert all(proc.returncode == 0 for proc in runs), runs[1].stderr
+    assert (tmp_path / 'true.csv').read_text() == (tmp_path / 'edited.csv').read_text()
+    # the same duration, no gap, the same /diagnostics (count) in the output bag
+    head = [line for line in runs[0].stdout.splitlines() if 'replayed in' not in line
+            and 'out' not in line]
+    assert head == [line.replace('edited', 'true') for line in runs[1].stdout.splitlines()
+                    if 'replayed in' not in line and 'out' not in line]
+
+
 def test_input_topics_without_messages_are_refused_even_if_another_topic_has_some(env,
                                                                                   tmp_path):
     bag = write_bag(tmp_path / 'bag', n=0, extra=[('/chatter', 'std_msgs/msg/Float64', 300)])
@@ -346,6 +394,44 @@ def test_force_never_replaces_an_output_of_another_kind(env, tmp_path):
     assert (folder / 'notes.txt').read_text() == 'keep me\n'
 
 
+@pytest.mark.parametrize('argv', [
+    ('replay', 'BAG', '--csv', 'PIPE'), ('replay', 'BAG', '--out', 'PIPE'),
+    ('learn-baseline', 'BAG', '--out', 'PIPE'),
+    ('build-table', '--out', 'PIPE'),
+    ('calibrate', 'CSV', '--pump', PAPER_PUMP, '--out', 'PIPE'),
+])
+def test_force_never_replaces_a_named_pipe_or_a_device_with_a_file(env, tmp_path, argv):
+    pipe = tmp_path / 'pipe'  # stands for /dev/null, which a test must not risk
+    os.mkfifo(pipe)
+    bag = write_bag(tmp_path / 'bag', n=50) if 'BAG' in argv else None
+    csv = tmp_path / 'bench.csv'
+    csv.write_text('speed_rpm,pressure_bar,torque_nm\n1000,100,2.0\n2000,150,3.0\n')
+    given = {'PIPE': pipe, 'BAG': bag, 'CSV': csv}
+    argv = [given.get(arg, arg) if isinstance(arg, str) else arg for arg in argv]
+    refused(cli(env, *argv, '--force'), str(pipe), 'named pipe', 'not replaced')
+    assert pipe.is_fifo()
+
+
+@pytest.mark.parametrize('argv', [
+    ('learn-baseline', 'BAG', '--out', 'BAG/metadata.yaml'),
+    ('calibrate', 'BAG', '--pump', PAPER_PUMP, '--out', 'BAG/metadata.yaml'),
+    ('calibrate', 'CSV', '--pump', PAPER_PUMP, '--out', 'CSV'),
+    ('calibrate', 'CSV', '--pump', PAPER_PUMP, '--out', 'OUT', '--report', 'HERE'),
+])
+def test_force_never_writes_an_output_into_or_over_an_input(env, tmp_path, argv):
+    bag = write_bag(tmp_path / 'data' / 'bag', n=50)
+    csv = tmp_path / 'data' / 'bench.csv'
+    csv.write_text('speed_rpm,pressure_bar,torque_nm\n1000,100,2.0\n2000,150,3.0\n')
+    given = {'BAG': str(bag), 'CSV': str(csv), 'OUT': str(tmp_path / 'p.yaml'),
+             'HERE': str(tmp_path / 'data')}
+    argv = [arg.replace(arg.split('/')[0], given[arg.split('/')[0]])
+            if isinstance(arg, str) and arg.split('/')[0] in given else arg for arg in argv]
+    before = {p: p.read_bytes() for p in (tmp_path / 'data').rglob('*') if p.is_file()}
+    refused(cli(env, *argv, '--force'), 'an output cannot be at, in or around the input')
+    assert {p: p.read_bytes() for p in (tmp_path / 'data').rglob('*') if p.is_file()} == before
+    assert not (tmp_path / 'p.yaml').exists()
+
+
 # -- fleets: unique output names, folders not files, paths that survive a Dask worker -------
 
 
@@ -372,7 +458,7 @@ def test_fleet_bags_with_the_same_name_get_distinct_outputs(env, tmp_path, small
 @pytest.mark.parametrize(('flags', 'words'), [
     (['--csv', 'res/m3.csv'], ['--csv res/m3.csv', 'names a folder']),
     (['--out', 'res/x', '--plots', 'res/x'], ['--out and --plots name the same output']),
-    (['--out', 'a'], ['an output cannot be at, in or around the input bag']),
+    (['--out', 'a'], ['an output cannot be at, in or around the input ']),
 ])
 def test_fleet_output_mistakes_are_refused_before_anything_runs(env, tmp_path, small_bag,
                                                                 flags, words):
@@ -811,3 +897,45 @@ def test_a_sqlite_bag_with_a_timestamp_of_text_is_one_line_naming_the_bag(env, t
     with sqlite3.connect(db) as conn:
         conn.execute("UPDATE messages SET timestamp = 'abc' WHERE id = 7")
     refused(cli(env, 'replay', bag, '--quiet'), f'bag {bag}: unreadable (ValueError:')
+
+
+# -- inputs that are not regular files ----------------------------------------------------
+
+
+def _not_a_file(kind, tmp_path):
+    """Return a path that is a named pipe, /dev/zero, a directory or a 65 MiB sparse file."""
+    if kind == 'dev_zero':
+        return Path('/dev/zero')
+    path = tmp_path / f'{kind}.yaml'
+    if kind == 'fifo':
+        os.mkfifo(path)  # nothing ever writes to it: opening it for reading would block
+    elif kind == 'directory':
+        path.mkdir()
+    else:
+        with open(path, 'wb') as handle:
+            handle.truncate(65 << 20)
+    return path
+
+
+INPUT_FILES = {  # the command line that reads PATH as the input named
+    'pump': ('torque', '--speed-rpm', 1000, '--pressure-bar', 100, '--pump', 'PATH'),
+    'table': ('torque', '--speed-rpm', 1000, '--pressure-bar', 100, '--table', 'PATH'),
+    'params': ('replay', REPO / 'bags' / 'eha_nominal', '--params', 'PATH'),
+    'baseline': ('replay', REPO / 'bags' / 'eha_nominal', '--baseline', 'PATH'),
+    'bench_csv': ('calibrate', 'PATH', '--pump', PAPER_PUMP, '--out', 'OUT'),
+}
+
+
+@pytest.mark.parametrize('kind', ['fifo', 'dev_zero', 'directory', 'oversized'])
+@pytest.mark.parametrize('what', sorted(INPUT_FILES))
+def test_an_input_that_is_not_a_regular_file_is_one_line_never_a_hang(env, tmp_path, what,
+                                                                      kind):
+    if kind in ('directory', 'oversized') and what in ('table', 'bench_csv'):
+        pytest.skip('a directory of CSVs is an input; a table is a zip read by its index')
+    path = _not_a_file(kind, tmp_path)
+    argv = [path if arg == 'PATH' else tmp_path / 'out.yaml' if arg == 'OUT' else arg
+            for arg in INPUT_FILES[what]]
+    line = refused(cli(env, *argv, timeout=60), str(path))
+    assert any(words in line for words in (
+        'not a regular file', 'is not a file', 'larger than 64 MiB')), line
+    assert not (tmp_path / 'out.yaml').exists()

@@ -28,6 +28,7 @@ from pump_friction_ros.core.baseline_file import (
     load_baseline,
     PROVENANCE_PARAMETERS,
     read_baseline,
+    restore_baseline,
     write_baseline,
 )
 from pump_friction_ros.core.baseline_store import (
@@ -426,6 +427,18 @@ def test_an_unwritable_path_warns_once_counts_and_never_raises(table, tmp_path):
     assert dict(baseline.diagnostics()[0])['baseline_errors'] == 2
 
 
+def test_a_file_name_too_long_for_the_file_system_is_one_line_and_never_raises(
+        table, tmp_path):
+    path = tmp_path / ('b' * 300 + '.yaml')  # past NAME_MAX (255): even stat() fails
+    core = make(table)
+    baseline = BaselineStore(path, core)
+    severity, line = baseline.load()
+    assert severity == 'error' and 'File name too long' in line and '\n' not in line
+    feed(core)
+    assert baseline.save() == '' and not baseline.writable  # learnt in memory only
+    assert baseline.status.startswith('not used: ') and baseline.errors == 1
+
+
 def test_an_existing_files_permissions_are_kept(table, tmp_path):
     path = tmp_path / 'baseline.yaml'
     write_baseline(path, baseline_document(make(table)))
@@ -463,3 +476,55 @@ def test_a_relative_baseline_file_is_relative_to_the_current_directory(monkeypat
     monkeypatch.chdir(tmp_path)
     assert baseline_path('state/b.yaml', '/x') == tmp_path / 'state' / 'b.yaml'
     assert baseline_path('/abs/b.yaml', '/x') == Path('/abs/b.yaml')
+
+
+def _leaves(value, where=()):
+    """Yield the path of every entry of a plain structure (a list's first item stands for all)."""
+    if where:
+        yield where
+    if isinstance(value, dict):
+        for key, inner in value.items():
+            yield from _leaves(inner, (*where, key))
+    elif isinstance(value, list) and value:
+        yield from _leaves(value[0], (*where, 0))
+
+
+# what a hand-edited or bit-flipped file can hold where the monitor wrote a number, a list
+# or a mapping: infinities, a number past a double's range, the wrong kind of value
+WRONG_VALUES = {'inf': math.inf, 'huge': 10**400, 'list': [1], 'null': None, 'text': 'x',
+                'mapping': {}, 'bool': True, 'negative': -1}
+
+
+@pytest.mark.parametrize('wrong', sorted(WRONG_VALUES))
+def test_any_entry_of_the_monitor_state_replaced_is_refused_or_usable_never_a_crash(
+        table, tmp_path, wrong):
+    doc = baseline_document(learnt_core(table))
+    fresh = make(table).monitor.state_dict()
+    crashes = []
+    for where in _leaves(doc['monitor_state']):
+        if where == ('version',):
+            continue
+        broken = json.loads(json.dumps(doc)) if wrong != 'huge' else yaml.safe_load(
+            yaml.safe_dump(doc))
+        inner = broken['monitor_state']
+        for key in where[:-1]:
+            inner = inner[key]
+        inner[where[-1]] = WRONG_VALUES[wrong]
+        core = make(table)
+        try:
+            restore_baseline(core, broken, tmp_path / 'baseline.yaml')
+        except BaselineError as exc:
+            if '\n' in str(exc) or not same(core.monitor.state_dict(), fresh) \
+                    or core.learnt[0] != 0:
+                crashes.append(f'{where}: refused but half loaded or not one line')
+            continue
+        except Exception as exc:  # what the test is for: any other error
+            crashes.append(f'{where}: {type(exc).__name__}: {exc}')
+            continue
+        try:  # taken: the monitor runs on, and saves a state that loads back
+            feed(core, start=10**9)
+            again = make(table)
+            restore_baseline(again, baseline_document(core), tmp_path / 'baseline.yaml')
+        except Exception as exc:
+            crashes.append(f'{where}: taken, then {type(exc).__name__}: {exc}')
+    assert not crashes, '\n'.join(crashes)

@@ -94,17 +94,19 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         write_baseline,
     )
     from ..core.estimator import estimator_from_config
+    from ..staging import refuse_at_inputs
 
     out = Path(args.out).expanduser().absolute()
     if out.is_dir():
         raise OutputError(f'--out {out} is a folder; give the baseline file')
     if out.exists() and not args.force:
         raise OutputError(f'--out {out} exists (--force replaces it)')
-    writable_folder(out)  # before the bags are replayed: a bad path fails at once
     config = estimator_config(args)
     remaps = parse_remaps(args.topic_remap)
     bags = discover_bags(args.bags)
     refuse_repeats(bags)  # learnt twice, its running would weigh double
+    refuse_at_inputs('--out', out, bags)  # --force would write into a bag
+    writable_folder(out)  # before the bags are replayed: a bad path fails at once
     document: dict[str, Any] | None = None
     source = Path(args.baseline) if args.baseline else None
     if source is not None:

@@ -50,7 +50,13 @@ from ..core.estimator import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
-from ..staging import raise_if_interrupted, remove_empty_folders, sigint_held, sigterm_kept
+from ..staging import (
+    raise_if_interrupted,
+    refuse_at_inputs,
+    remove_empty_folders,
+    sigint_held,
+    sigterm_kept,
+)
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',
            'plan_outputs', 'refuse_repeats', 'run_job', 'run_jobs']
@@ -249,10 +255,7 @@ def plan_outputs(bags: list[Path], out: str | None, csv: str | None, plots: str 
             if target in targets:
                 raise UsageError(f'{targets[target]} and {flag} name the same output {target}')
             targets[target] = flag
-            for bag in inputs:
-                if target == bag or bag in target.parents or target in bag.parents:
-                    raise UsageError(f'{flag} {target}: an output cannot be at, in or around '
-                                     f'the input bag {bag}')
+            refuse_at_inputs(flag, target, inputs)
     if len(bags) > 1:
         try:
             for (flag, _, _), column in zip(flags, columns, strict=True):

@@ -170,6 +170,9 @@ class ReadStats:
     # messages per input topic that the bag's metadata counts (more than read: the storage
     # ends early or is corrupt where rosbags stops without an error)
     claimed: dict[str, int] = field(default_factory=dict)
+    # messages on an input topic of another type, not read: the node's subscription of its
+    # type never receives them (``'/load_pressure (sensor_msgs/msg/Temperature)'``: count)
+    other_type: dict[str, int] = field(default_factory=dict)
 
     def unread(self) -> dict[str, int]:
         """Return the messages the metadata counts but the storage did not give, per topic."""
@@ -253,8 +256,12 @@ class BagInputs:
         self._decoders: dict[int, TopicDecoder] = {}
         self._topic_of: dict[int, str] = {}
         self.connections: list[Any] = []
+        self._other_type: dict[str, int] = {}
         for conn in self.reader.connections:
-            if conn.topic in self.wanted:
+            if conn.topic in self.wanted and conn.msgtype != self.wanted[conn.topic].msgtype:
+                key = f'{conn.topic} ({conn.msgtype})'  # a second publisher's type
+                self._other_type[key] = self._other_type.get(key, 0) + int(conn.msgcount or 0)
+            elif conn.topic in self.wanted:
                 self._decoders[conn.id] = TopicDecoder(self.wanted[conn.topic],
                                                        config.joint_name, self.typestore)
                 self._topic_of[conn.id] = conn.topic
@@ -269,11 +276,15 @@ class BagInputs:
     def _check_topics(self) -> None:
         if self.reader.message_count == 0 and not self._has_any_message():
             raise BagError(f'bag {self.path} holds no messages')
-        present = {c.topic: c.msgtype for c in self.reader.connections}
-        for topic, spec in self.wanted.items():
-            if topic in present and present[topic] != spec.msgtype:
-                raise BagError(f'bag {self.path}: topic {topic} has type {present[topic]}, '
-                               f'the node expects {spec.msgtype}')
+        types: dict[str, set[str]] = {}
+        for conn in self.reader.connections:
+            types.setdefault(conn.topic, set()).add(conn.msgtype)
+        present = {topic: next(iter(found)) for topic, found in types.items()}
+        for topic, spec in self.wanted.items():  # only another type: nothing the node reads
+            if topic in types and spec.msgtype not in types[topic]:
+                raise BagError(f'bag {self.path}: topic {topic} has type '
+                               f'{", ".join(sorted(types[topic]))}, the node expects '
+                               f'{spec.msgtype}')
         missing = [t for t in self.wanted if t not in present]
         if len(missing) == len(self.wanted):
             expected = ', '.join(f'{t} ({s.msgtype})' for t, s in self.wanted.items())
@@ -309,10 +320,29 @@ class BagInputs:
         if storage == 'mcap' and not mode:
             fmt = self._mcap_chunk_compression()
             mode = 'storage' if fmt else ''
-        return BagMeta(storage=storage, start_ns=int(reader.start_time),
-                       end_ns=max(int(reader.end_time) - 1, int(reader.start_time)),
+        start_ns, end_ns = self._storage_span()
+        return BagMeta(storage=storage, start_ns=start_ns, end_ns=max(end_ns - 1, start_ns),
                        input_message_count=sum(c.msgcount for c in self.connections),
                        compression_format=fmt, compression_mode=mode)
+
+    def _storage_span(self) -> tuple[int, int]:
+        """
+        Return the log times of the first message and just after the last [ns].
+
+        From the storage files (sqlite3's MIN and MAX, MCAP's statistics or chunk indexes),
+        as ``ros2 bag info`` reports them after ``ros2 bag reindex``: metadata.yaml's
+        ``starting_time`` and ``duration`` are a copy, and an edited or stale copy would
+        shift every ``time_s`` and put diagnostics in a gap that is not there.
+        """
+        reader = self.reader
+        inner = getattr(reader, 'storage', None)  # a bag folder's reader, or a storage file's
+        storages = getattr(inner, 'storages', None) or [inner]
+        spans = [(int(m.start_time), int(m.end_time)) for m in
+                 (getattr(x, 'metadata', None) for x in storages)
+                 if m is not None and m.message_count]
+        if not spans:  # (a rosbags without per-storage times): the metadata's
+            return int(reader.start_time), int(reader.end_time)
+        return min(a for a, _ in spans), max(b for _, b in spans)
 
     def _mcap_chunk_compression(self) -> str:
         """Chunk compression of the bag's first MCAP file ('' if none, or unreadable)."""
@@ -336,7 +366,8 @@ class BagInputs:
         for conn in self.connections:
             claimed[self._topic_of[conn.id]] += int(conn.msgcount or 0)
         return ReadStats(dict(self.messages_read),
-                         sum(d.fallbacks for d in self._decoders.values()), claimed)
+                         sum(d.fallbacks for d in self._decoders.values()), claimed,
+                         dict(self._other_type))
 
     def chunks(self) -> Iterator[Chunk]:
         """

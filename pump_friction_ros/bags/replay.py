@@ -340,6 +340,7 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
     summary.span_ns = (start_ns, meta.end_ns)
     summary.messages_read = dict(stats.messages_read)
     summary.unread = stats.unread()
+    summary.other_type = dict(stats.other_type)
     summary.estimates = core.counts['estimates']
     summary.counts = dict(core.counts)
     summary.decoded_one_by_one = stats.fallbacks

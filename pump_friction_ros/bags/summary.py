@@ -47,6 +47,7 @@ class ReplaySummary:
     span_ns: tuple[int, int] = (0, 0)  # log times of the first and the last message [ns]
     messages_read: dict[str, int] = field(default_factory=dict)
     unread: dict[str, int] = field(default_factory=dict)  # in the metadata, not the storage
+    other_type: dict[str, int] = field(default_factory=dict)  # `ReadStats.other_type`
     estimates: int = 0
     published: int = 0
     counts: dict[str, int] = field(default_factory=dict)
@@ -88,8 +89,25 @@ class ReplaySummary:
 
         """
         items = ', '.join(f'{k} {n}' for k in SKIP_COUNTERS if (n := self.counts.get(k, 0)))
-        unread = self.unread_note()
-        return (f', skipped: {items}' if items else '') + (f', {unread}' if unread else '')
+        notes = [note for note in (self.unread_note(), self.other_type_note()) if note]
+        return (f', skipped: {items}' if items else '') + ''.join(f', {n}' for n in notes)
+
+    def other_type_note(self) -> str:
+        """
+        Say how many messages on an input topic were of another type, and not read.
+
+        Returns
+        -------
+        str
+            ``'not read, of another type: /load_pressure (sensor_msgs/msg/Temperature)
+            999 (...)'``, or '' if none.
+
+        """
+        if not self.other_type:
+            return ''
+        items = ', '.join(f'{key} {n}' for key, n in self.other_type.items())
+        return (f'not read, of another type: {items} (the node subscribes to its own type '
+                'only)')
 
     def unread_note(self) -> str:
         """
@@ -139,7 +157,9 @@ class ReplaySummary:
                  f'{self.final_other_scale:.3f} +- {1.96 * self.final_other_scale_std:.3f} '
                  '(95 %)',
                  f'  replayed in {self.elapsed_s:.2f} s']
-        if self.unread:  # after the messages read
+        if self.other_type:  # after the messages read
+            lines.insert(2, f'  {self.other_type_note()}')
+        if self.unread:
             lines.insert(2, f'  {self.unread_note()}')
         if self.diagnostics_gaps:
             lines.insert(1, f'  gaps in the log: {len(self.diagnostics_gaps)}, in which '

@@ -32,6 +32,7 @@ import numpy as np
 from ..core.inputs import TEMPERATURE_RANGE_C
 from ..core.node_parameters import EstimatorConfig, PARAMETERS
 from ..errors import CalibrationError, quote
+from ..input_files import open_regular
 from ..physics.oil import WaltherViscosity
 from ..physics.units import BAR_TO_PA, cst_to_m2_s, m2_s_to_cst, RPM_TO_RAD_S
 from ..table.friction_table import FrictionTable
@@ -152,9 +153,11 @@ def load_bench_csv(path: str | Path, oil: WaltherViscosity, default_viscosity_m2
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding='utf-8')
+        with open_regular(path) as handle:  # a named pipe would block, /dev/zero fill memory
+            text = handle.read().decode('utf-8')
     except (OSError, UnicodeDecodeError) as exc:
-        raise CalibrationError(f'cannot read {path}: {exc}') from exc
+        raise CalibrationError(f'cannot read {path}: '
+                               f'{getattr(exc, "strerror", None) or exc}') from None
     lines = text.splitlines()
     rows = list(csv.DictReader(lines))
     needed = ('speed_rpm', 'pressure_bar', 'torque_nm')

@@ -55,7 +55,7 @@ from ..paths import resolve_path
 from ..physics.model import theoretical_torque_nm
 from ..physics.oil import WaltherViscosity
 from ..physics.pump_parameters import load_pump
-from ..staging import Staged, StagedOutputs
+from ..staging import refuse_at_inputs, Staged, StagedOutputs
 from ..table.friction_table import build_table
 
 __all__ = ['calibrate']
@@ -118,6 +118,9 @@ def calibrate(inputs: list[str | Path], base_file: str | Path, out_file: str | P
     if out_file is not None:
         round_trip_yaml()  # fail before the fit, not after it
     # every output location is checked and made before anything is computed or written
+    for flag, target in (('--out', out_file), ('--report', report_dir)):
+        if target is not None:  # --force would replace the data, or a folder holding it
+            refuse_at_inputs(flag, target, inputs)
     staged = StagedOutputs()
     try:
         pump_out = None if out_file is None else staged.add(out_file, force, False)
@@ -150,7 +153,7 @@ def _calibrate(inputs: list[str | Path], base_file: str | Path, pump_out: Staged
         if item.is_dir():
             assert table is not None  # built above: an input is a folder
             parts.append(load_bag_samples(item, config, table, visc0, remaps, steady_only))
-        elif item.suffix.lower() == '.csv' or item.is_file():
+        elif item.suffix.lower() == '.csv' or item.exists():  # a pipe: refused as it is read
             parts.append(load_bench_csv(item, oil, visc0))
         else:
             raise CalibrationError(f'input not found: {item}')

@@ -43,6 +43,7 @@ import yaml
 
 from .. import __version__, MODEL_VERSION
 from ..errors import BaselineError, BaselineMismatchError, ConfigError, OutputError, quote
+from ..input_files import special_kind
 from ..staging import remove_empty_folders
 from ..yaml_files import read_yaml, SafeDumper
 
@@ -261,6 +262,7 @@ def write_baseline(path: Path, document: dict[str, Any]) -> None:
                                    default_flow_style=False, allow_unicode=True)
     except yaml.YAMLError as exc:
         raise BaselineError(f'baseline for {path}: not plain values: {exc}') from None
+    _refuse_special(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.tmp', dir=path.parent)
@@ -300,6 +302,7 @@ def writable_folder(path: Path) -> None:
 
     """
     missing = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]
+    _refuse_special(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.probe', dir=path.parent)
@@ -310,6 +313,14 @@ def writable_folder(path: Path) -> None:
                           f'{exc.strerror or type(exc).__name__}') from None
     finally:
         remove_empty_folders(missing)
+
+
+def _refuse_special(path: Path) -> None:
+    """Refuse to replace /dev/null or a named pipe with a baseline file (`OutputError`)."""
+    special = special_kind(path)
+    if special:
+        raise OutputError(f'cannot write baseline file {path}: it is {special}, not a '
+                          'regular file: not replaced')
 
 
 def _fsync_folder(folder: Path) -> None:

@@ -135,8 +135,17 @@ class BaselineStore:
             Severity (``info``, ``warning`` or ``error``) and the line to log.
 
         """
-        if not self.path.exists():
-            return 'info', f'baseline file {self.path}: none yet, learning from scratch'
+        try:
+            if not self.path.exists():  # ENAMETOOLONG, EACCES on a folder: raised, not False
+                return 'info', f'baseline file {self.path}: none yet, learning from scratch'
+        except OSError as exc:
+            self.errors += 1
+            self.writable = False
+            self.status = f'not used: {exc.strerror or exc}'
+            self.note = 'baseline file not usable: learning in memory, nothing saved'
+            return 'error', (f'baseline file {self.path}: {exc.strerror or exc}; learning in '
+                             'memory, nothing is saved (set baseline_file to a path that can '
+                             'be written)')
         try:
             document = read_baseline(self.path)
             restore_baseline(self.core, document, self.path)

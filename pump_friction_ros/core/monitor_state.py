@@ -190,7 +190,10 @@ class MonitorPersistence:
         saved = self.state_dict()
         try:
             self._load(state)
-        except (KeyError, TypeError, ValueError, IndexError) as exc:
+        # a hand-edited file: the wrong kind of value (a list where a mapping goes), a
+        # number past a double's range (10**400) or an infinite count (.inf)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError,
+                ArithmeticError) as exc:
             self._load(saved)
             raise ValueError(f'malformed monitor state: {exc}') from None
 

@@ -35,6 +35,7 @@ from .friction_table import (
 )
 from .. import MODEL_VERSION
 from ..errors import TableError
+from ..input_files import open_regular
 from ..physics.model import COMPONENTS
 from ..physics.pump_parameters import PumpParams
 from ..physics.units import m2_s_to_cst
@@ -71,7 +72,7 @@ def load_table(path: str | Path, params: PumpParams | None = None) -> FrictionTa
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_regular(path) as handle, np.load(handle, allow_pickle=False) as data:
             missing = [name for name in _ARRAYS if name not in data.files]
             if missing:
                 raise TableError(f'{path}: not a friction table (missing {", ".join(missing)})')
