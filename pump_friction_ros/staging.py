@@ -41,11 +41,13 @@ from typing import Any
 from .errors import OutputError, UsageError
 from .input_files import special_kind
 
-__all__ = ['Staged', 'StagedOutputs', 'commit_all', 'discard_all', 'looks_like_bag',
-           'looks_like_plots', 'raise_if_interrupted', 'remove_empty_folders', 'sigint_held',
-           'sigint_ignored', 'sigint_kept', 'sigterm_kept', 'stop_signal']
+__all__ = ['Staged', 'StagedOutputs', 'commit_all', 'committed_outputs', 'discard_all',
+           'looks_like_bag', 'looks_like_plots', 'note_committed', 'raise_if_interrupted',
+           'refuse_at_inputs', 'remove_empty_folders', 'sigint_held', 'sigint_ignored',
+           'sigint_kept', 'sigterm_kept', 'stop_signal']
 
 _SIGINT_SEEN: list[int] = []  # Ctrl-Cs received through `sigint_kept`'s handler
+_COMMITTED: list[str] = []  # outputs this command has put in place (`note_committed`)
 
 
 def _note_and_raise(signum: int, frame: object) -> None:
@@ -70,12 +72,39 @@ def sigint_kept() -> None:
     taken the same way: a stop that discards them (`stop_signal` says which came).
     """
     _SIGINT_SEEN.clear()
+    _COMMITTED.clear()
     if threading.current_thread() is threading.main_thread():
         if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             signal.signal(signal.SIGINT, _note_and_raise)
         if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
             signal.signal(signal.SIGTERM, _note_and_raise)
     _quiet_swallowed_stops()
+
+
+def note_committed(target: str | Path) -> None:
+    """
+    Note an output put in place, complete: a Ctrl-C after it cannot take it back.
+
+    Parameters
+    ----------
+    target : str or Path
+        The output, as the command line named it.
+
+    """
+    _COMMITTED.append(str(target))
+
+
+def committed_outputs() -> list[str]:
+    """
+    Return the outputs this command has put in place so far (`note_committed`).
+
+    Returns
+    -------
+    list of str
+        In the order they were committed.
+
+    """
+    return list(_COMMITTED)
 
 
 def _default_sigterm_in_child() -> None:
@@ -375,6 +404,7 @@ class Staged:
                 from None
         shutil.rmtree(self._tmp_parent, ignore_errors=True)
         self._made = []
+        note_committed(self.target)
 
     def discard(self) -> None:
         """Remove the staged output and the folders made for it (if left empty)."""

@@ -306,6 +306,17 @@ def test_the_time_span_comes_from_the_storage_not_an_edited_metadata_file(
                     if 'replayed in' not in line and 'out' not in line]
 
 
+@pytest.mark.parametrize(('remaps', 'words'), [
+    (['joint_state:=/eha/js'], 'the node has no input /joint_state'),  # a typo
+    (['joint_states:=/a:=/b'], "bad --topic-remap 'joint_states:=/a:=/b'"),
+    (['joint_states:=/a', 'joint_states:=/b'], '/joint_states remapped twice'),
+    (['load_pressure:=/joint_states'], '/joint_states and /load_pressure would both read'),
+])
+def test_a_topic_remap_that_cannot_mean_what_it_says_is_refused(env, tmp_path, remaps, words):
+    bag = write_bag(tmp_path / 'bag', n=50)
+    refused(cli(env, 'replay', bag, '--topic-remap', *remaps), words)
+
+
 def test_input_topics_without_messages_are_refused_even_if_another_topic_has_some(env,
                                                                                   tmp_path):
     bag = write_bag(tmp_path / 'bag', n=0, extra=[('/chatter', 'std_msgs/msg/Float64', 300)])
@@ -599,6 +610,37 @@ def test_a_second_ctrl_c_while_reporting_the_first_still_exits_130_with_one_line
     assert (proc.returncode, proc.stderr) == (130, 'pump_friction: interrupted\n')
 
 
+CTRL_C_AFTER_THE_COMMIT = """
+import os, signal, sys
+from pump_friction_ros.app import cli, data_commands
+from pump_friction_ros.staging import StagedOutputs
+
+
+def committed_then_interrupted(args):
+    staged = StagedOutputs()
+    item = staged.add(sys.argv[1], False, False)
+    item.path.write_text('complete\\n')
+    staged.commit()
+    os.kill(os.getpid(), signal.SIGINT)  # while the summary prints: the output is in place
+    print('summary')
+    return 0
+
+
+data_commands.cmd_evaluate_monitor = committed_then_interrupted
+sys.exit(cli.main(['evaluate-monitor', '--quick']))
+"""
+
+
+def test_a_ctrl_c_after_the_outputs_are_in_place_says_they_are_complete(env, tmp_path):
+    out = tmp_path / 'result.txt'
+    proc = subprocess.run([sys.executable, '-c', CTRL_C_AFTER_THE_COMMIT, str(out)],
+                          capture_output=True, text=True, timeout=60, env=env, check=False)
+    assert proc.returncode == 130
+    assert proc.stderr == (f'pump_friction: interrupted after writing {out} (complete; nothing '
+                           'else was written)\n')
+    assert out.read_text() == 'complete\n'
+
+
 SIGNAL_IN_A_FINALISER = '''
 import os, signal, sys
 from pump_friction_ros.app import cli
@@ -777,7 +819,7 @@ def test_a_relative_pump_file_from_another_directory_is_explained(env, tmp_path)
 def test_replay_counts_exactly_what_the_nodes_conversion_counts(tmp_path, env, monkeypatch):
     """Batch decoder + replay vs rosbags messages through the node's own conversion."""
     from pump_friction_ros.bags.replay import replay_bag
-    from pump_friction_ros.core.estimator import estimator_from_config
+    from pump_friction_ros.core.estimator_setup import estimator_from_config
     from pump_friction_ros.core.inputs import INPUTS
     from pump_friction_ros.core.node_parameters import EstimatorConfig
     from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns

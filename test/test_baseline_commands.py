@@ -22,7 +22,7 @@ from pump_friction_ros.bags import fleet
 from pump_friction_ros.bags.fleet import ReplayJob, run_job
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.core.baseline_file import load_baseline, provenance, read_baseline
-from pump_friction_ros.core.estimator import estimator_from_config
+from pump_friction_ros.core.estimator_setup import estimator_from_config
 from pump_friction_ros.core.node_parameters import BAG_PARAMS_FILE, load_estimator_config
 import pytest
 

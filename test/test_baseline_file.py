@@ -184,6 +184,18 @@ def test_learning_goes_on_after_a_restart_from_the_file(table, tmp_path):
                                 first_last(10 * NS)[1])
 
 
+def test_negative_stamps_are_rejected_so_a_saved_file_always_loads_back(table, tmp_path):
+    core = feed(make(table), start=-2 * T0)  # every stamp before 1970
+    assert core.counts['rejected_negative_stamp'] == 2 * len(stamps())
+    assert core.learnt[0] == 0 and core.counts['estimates'] == 0
+    feed(core)  # then a sane clock: learnt from, and the file loads back at a restart
+    path = tmp_path / 'baseline.yaml'
+    write_baseline(path, baseline_document(core))
+    fresh = make(table)
+    load_baseline(fresh, path)
+    assert fresh.learnt == (N_MONITORED, *first_last())
+
+
 def test_the_chunk_path_records_the_same_learnt_span_as_on_input(table):
     n = N_WITHOUT_TORQUE + N_WITH_TORQUE
     joint = np.array(stamps(), dtype=np.int64)

@@ -63,7 +63,7 @@ def _irregular(rng, stamps, values, kind, n_bad):
     has_value = np.ones(n, dtype=bool)
     defects = np.zeros(n, dtype=np.int64)
     for i in rng.choice(np.arange(30, n - 40), size=n_bad, replace=False).tolist():
-        trouble = rng.integers(8)
+        trouble = rng.integers(9)
         if trouble == 0:
             values[i] = math.nan
         elif trouble == 1:
@@ -80,6 +80,8 @@ def _irregular(rng, stamps, values, kind, n_bad):
             defects[i] = (Defect.MISSING_JOINT, Defect.MALFORMED)[rng.integers(2)]
         elif trouble == 7 and kind == K.JOINT_STATE:
             has_value[i] = False  # torque only
+        elif trouble == 8:
+            stamps[i] = -stamps[i]  # before 1970: no clock's time
     if kind == K.JOINT_STATE:
         defects[10], defects[11] = Defect.MISSING_JOINT, Defect.MALFORMED
     return has_value, defects
@@ -167,7 +169,8 @@ def state(core):
     slots = [(s.stamp_ns, s.value, s.out_of_order_run) for s in (
         core._speed, core._pressure, core._port_a, core._port_b, core._torque,
         core._temperature)]
-    return exact((core.counts, core.last, core.last_stale_reason, slots,
+    return exact((core.counts, core.last, core.last_stale_reason, core.stale_since_estimate,
+                  slots,
                   monitor_state(core.monitor), vars(core.filter), vars(core.settled),
                   core._monitor_stamp_ns))
 
@@ -230,7 +233,8 @@ def test_irregular_chunks_give_exactly_what_on_input_gives(table, run, speed, to
     assert made == counts['estimates'] > 2000
     assert levels >= {0, 1}  # the monitor raised an alarm
     for name in ('rejected_non_finite', 'rejected_out_of_range', 'rejected_out_of_order',
-                 'rejected_duplicate', 'rejected_future_stamp', 'rejected_undecodable',
+                 'rejected_duplicate', 'rejected_future_stamp', 'rejected_negative_stamp',
+                 'rejected_undecodable',
                  'stamp_resyncs', 'stale_skips', 'residuals', 'monitor_samples'):
         assert counts[name], name
     joint = SpeedSource.JOINT_STATE in (speed, torque)

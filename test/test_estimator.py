@@ -198,6 +198,22 @@ def test_estimates_stamped_an_hour_behind_the_clock_are_stale_and_the_status_say
     assert snap.message.startswith('stale: the latest estimate is stamped 3600 s before')
 
 
+def test_a_clock_gone_back_behind_the_latest_estimate_is_stale_not_its_old_level(table):
+    est = make(table)
+    t0 = 100 * 10**9
+    for i in range(300):
+        est.on_input(K.LOAD_PRESSURE, t0 + i * 10**6, 100e5)
+        assert est.on_input(K.SHAFT_SPEED, t0 + i * 10**6 + 1, 300.0) is not None
+    lead_s = est.config.max_stamp_lead_s
+    assert est.diagnostics(t0 + 300 * 10**6).level == OK
+    # stamped ahead by no more than an input may lead its receipt: still the estimate's level
+    assert est.diagnostics(t0 + 299 * 10**6 - round(0.9 * lead_s * 1e9)).level == OK
+    snap = est.diagnostics(10**9)  # the simulation restarted: its clock 99 s back
+    assert snap.level == STALE
+    assert snap.message.startswith('stale: the latest estimate is stamped 99.3 s after this '
+                                   'clock: the clock went back')
+
+
 def test_inputs_that_stop_between_two_statuses_are_a_dropout_not_another_clock(table):
     est = make(table)
     assert est.diagnostics(0).level == STALE
@@ -206,6 +222,19 @@ def test_inputs_that_stop_between_two_statuses_are_a_dropout_not_another_clock(t
         assert est.on_input(K.SHAFT_SPEED, i * 10**6 + 1, 300.0) is not None
     snap = est.diagnostics(10**9)  # the latest estimate 0.7 s old > stale_timeout_s 0.5 s
     assert snap.level == STALE and snap.message == 'stale: no shaft speed'
+
+
+def test_inputs_that_stop_after_an_old_stale_skip_are_no_shaft_speed_not_that_skip(table):
+    est = make(table)
+    est.on_input(K.SHAFT_SPEED, 1, 300.0)  # before any pressure: a stale skip
+    assert est.counts['stale_skips'] == 1
+    for i in range(1, 300):  # then 0.3 s of estimates, then nothing
+        est.on_input(K.LOAD_PRESSURE, i * 10**6, 100e5)
+        assert est.on_input(K.SHAFT_SPEED, i * 10**6 + 1, 300.0) is not None
+    snap = est.diagnostics(10**9)
+    assert snap.level == STALE and snap.message == 'stale: no shaft speed'
+    est.on_input(K.SHAFT_SPEED, 10**9 + 1, 300.0)  # the pressure gone: a skip, said as such
+    assert est.diagnostics(10**9 + 10**8).message == 'stale: no fresh pressure'
 
 
 def test_a_stale_status_does_not_repeat_the_old_estimates_table_flags(table):

@@ -39,7 +39,7 @@ from pump_friction_ros.core.baseline_file import (  # noqa: E402
     read_baseline,
     write_baseline,
 )
-from pump_friction_ros.core.estimator import estimator_from_config  # noqa: E402
+from pump_friction_ros.core.estimator_setup import estimator_from_config  # noqa: E402
 from pump_friction_ros.core.inputs import InputKind as K  # noqa: E402
 from pump_friction_ros.core.node_parameters import load_estimator_config  # noqa: E402
 from pump_friction_ros.node.torque_estimator import TorqueEstimatorNode  # noqa: E402

@@ -36,7 +36,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus  # noqa: E402
 from pump_friction_ros.bags.sinks import output_qos, output_topics  # noqa: E402
 from pump_friction_ros.core.inputs import Defect, InputKind, INPUTS  # noqa: E402
 from pump_friction_ros.core.node_parameters import load_estimator_config  # noqa: E402
-from pump_friction_ros.errors import PumpFrictionError  # noqa: E402
+from pump_friction_ros.errors import ConfigError, PumpFrictionError  # noqa: E402
 from pump_friction_ros.messages.cdr_message import MessageDecoder  # noqa: E402
 from pump_friction_ros.messages.conversions import input_sample, stamp_to_ns  # noqa: E402
 from pump_friction_ros.node.torque_estimator import TorqueEstimatorNode  # noqa: E402
@@ -166,6 +166,25 @@ def test_with_simulated_time_before_the_first_clock_stamped_inputs_are_not_futur
         node.destroy_node()
 
 
+def test_with_simulated_time_and_no_clock_diagnostics_go_on_stale_and_say_why(ros):
+    node = ros('use_sim_time:=true', 'diagnostics_rate_hz:=10.0')
+    probe = Probe()
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    ex.add_node(probe)
+    try:
+        assert node.get_clock().now().nanoseconds == 0  # nobody publishes /clock here
+        assert spin_until(ex, lambda: len(probe.diagnostics) >= 2, 8.0), \
+            'no /diagnostics without /clock'
+        status = probe.diagnostics[-1].status[0]
+        assert level_from_msg(status.level) == level_from_msg(DiagnosticStatus.STALE)
+        assert status.message.startswith('stale: use_sim_time is true and no /clock has come')
+    finally:
+        ex.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:
@@ -241,6 +260,29 @@ def test_every_ranged_parameter_is_described_with_its_range_and_read_only(ros):
 def test_invalid_parameter_stops_start_up_with_one_clear_message(ros, override):
     with pytest.raises(PumpFrictionError, match=override.split(':=')[0]):
         ros(override)
+
+
+@pytest.mark.parametrize(('line', 'words'), [
+    ('max_input_age_s: 1', 'expected a double, got 1: the node refuses it'),
+    ('drive_loss_torque_nm: 0', 'expected a double, got 0'),
+    ('output_decimation: 2.0', 'expected an integer, got 2.0'),
+])
+def test_a_number_of_the_wrong_type_is_refused_by_the_node_and_by_the_replay_alike(
+        table_file, tmp_path, line, words):
+    params = tmp_path / 'params.yaml'
+    params.write_text(f'/**/torque_estimator:\n  ros__parameters:\n    {line}\n')
+    name = line.split(':')[0]
+    with pytest.raises(ConfigError, match=words):  # the replay's reading of the file
+        load_estimator_config([PARAMS, params])
+    # rclpy's, in the node (the file alone: after a file giving the integer, rcl keeps the
+    # integer and drops a double quietly)
+    rclpy.init(args=['--ros-args', '--params-file', str(params), '-p',
+                     f'table_file:={table_file}'])
+    try:
+        with pytest.raises(PumpFrictionError, match=name):
+            TorqueEstimatorNode()
+    finally:
+        rclpy.try_shutdown()
 
 
 def _stamped(sec=5, nanosec=250, frame_id=''):

@@ -213,3 +213,27 @@ def test_a_malformed_parameter_request_is_dropped_and_the_node_goes_on(table_fil
     raised = [line for line in text.splitlines() if 'a callback raised ValueError' in line]
     assert len(raised) == 2 and '(2 such error(s) so far)' in raised[1], text
     assert len([line for line in text.splitlines() if 'stopping on SIGINT' in line]) == 1, text
+
+
+WITHOUT_ROS = """
+import sys
+sys.modules['rclpy'] = None  # a shell where ROS 2 is not sourced: import rclpy fails
+from pump_friction_ros.node.{module} import main
+sys.exit(main({argv}))
+"""
+
+
+@pytest.mark.parametrize(('module', 'argv', 'words'), [
+    ('__main__', '[]', 'torque_estimator: cannot start: '),
+    ('measure_cpu', "['--runs', '1']", 'measure_node_cpu: '),
+])
+def test_without_ros_sourced_the_commands_say_so_in_one_line(tmp_path, module, argv, words):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO),
+                                                       os.environ.get('PYTHONPATH', '')]))
+    proc = subprocess.run([sys.executable, '-c', WITHOUT_ROS.format(module=module, argv=argv)],
+                          env=env, capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr
+    assert 'Traceback' not in proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(words), proc.stderr
+    assert 'source /opt/ros/jazzy/setup.bash' in lines[0]

@@ -139,7 +139,7 @@ def _decimals(number):
 def test_worked_example_replay_figures(worked_example):
     import numpy as np
     from pump_friction_ros.bags.replay import replay_bag
-    from pump_friction_ros.core.estimator import estimator_from_config
+    from pump_friction_ros.core.estimator_setup import estimator_from_config
     from pump_friction_ros.core.node_parameters import load_estimator_config
 
     _, tmp, _ = worked_example

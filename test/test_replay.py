@@ -29,7 +29,8 @@ from pump_friction_ros.bags.fleet import discover_bags, ReplayJob, run_jobs
 from pump_friction_ros.bags.outputs import CSV_COLUMNS
 from pump_friction_ros.bags.replay import replay_bag
 from pump_friction_ros.bags.sinks import float64_cdr
-from pump_friction_ros.core.estimator import Estimate, estimator_from_config, TorqueEstimator
+from pump_friction_ros.core.estimator import Estimate, TorqueEstimator
+from pump_friction_ros.core.estimator_setup import estimator_from_config
 from pump_friction_ros.core.inputs import Defect, InputKind, inputs_for
 from pump_friction_ros.core.node_parameters import (
     EstimatorConfig,

@@ -23,7 +23,7 @@ import math
 import re
 
 import numpy as np
-from pump_friction_ros.core.estimator import estimator_from_config
+from pump_friction_ros.core.estimator_setup import estimator_from_config
 from pump_friction_ros.core.inputs import InputKind, TEMPERATURE_RANGE_C
 from pump_friction_ros.core.node_parameters import EstimatorConfig
 from pump_friction_ros.core.oil_range import table_spec_for

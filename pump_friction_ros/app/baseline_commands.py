@@ -93,8 +93,8 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         writable_folder,
         write_baseline,
     )
-    from ..core.estimator import estimator_from_config
-    from ..staging import refuse_at_inputs
+    from ..core.estimator_setup import estimator_from_config
+    from ..staging import note_committed, refuse_at_inputs
 
     out = Path(args.out).expanduser().absolute()
     if out.is_dir():
@@ -155,6 +155,7 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         raise BaselineError('nothing learnt: no monitored running in the bags (|speed| above '
                             'monitor_min_speed_rad_s, with a measured torque)')
     write_baseline(out, document)
+    note_committed(out)
     first, last = learnt['first_stamp_ns'] * 1e-9, learnt['last_stamp_ns'] * 1e-9
     print(f'{out}: {learnt["samples"]} monitored samples, stamps {first:.3f} to {last:.3f} s, '
           f'pump {document["provenance"]["pump"]["name"]}: {status}')
@@ -177,6 +178,7 @@ def cmd_reset_baseline(args: argparse.Namespace) -> int:
 
     """
     from ..core.baseline_file import archive_baseline, read_baseline
+    from ..staging import note_committed
 
     path = Path(args.file).expanduser().absolute()
     if not path.is_file():
@@ -191,6 +193,7 @@ def cmd_reset_baseline(args: argparse.Namespace) -> int:
     if archived is None:
         raise BaselineError(f'baseline file not found: {path} (it went away before it was '
                             'moved aside)')
+    note_committed(archived)
     print(f'{path} moved to {archived}: the node learns a new baseline from its next start '
           '(a running node: call its ~/reset_monitor service instead, or it writes its '
           'state back)')

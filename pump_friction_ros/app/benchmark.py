@@ -194,7 +194,7 @@ def bench_replay() -> None:
     from rosbags.highlevel import AnyReader
 
     from ..bags.replay import replay_bag
-    from ..core.estimator import estimator_from_config
+    from ..core.estimator_setup import estimator_from_config
     from ..core.node_parameters import load_estimator_config
     from ..physics.pump_parameters import config_dir
 
@@ -305,7 +305,7 @@ def main(argv: list[str] | None = None) -> int:
 
     """
     parser = argparse.ArgumentParser(prog='python -m pump_friction_ros.app.benchmark',
-                                     description=__doc__.splitlines()[0])
+                                     description=__doc__.strip().splitlines()[0])
     parser.add_argument('sections', nargs='*', metavar='SECTION',
                         help=f'sections to run (default: all of {", ".join(SECTIONS)})')
     args = parser.parse_args(argv)

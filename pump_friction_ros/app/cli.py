@@ -31,6 +31,7 @@ from . import data_commands
 from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
 from .. import __version__, MODEL_VERSION
+from ..calibration.fit import NAMES as FIT_NAMES
 from ..errors import PumpFrictionError, UsageError
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
@@ -42,7 +43,13 @@ from ..physics.units import (
     rad_s_to_rpm,
     rpm_to_rad_s,
 )
-from ..staging import raise_if_interrupted, sigint_ignored, sigint_kept, stop_signal
+from ..staging import (
+    committed_outputs,
+    raise_if_interrupted,
+    sigint_ignored,
+    sigint_kept,
+    stop_signal,
+)
 from ..table.friction_table import TableSpec
 
 if TYPE_CHECKING:
@@ -389,13 +396,15 @@ def build_parser() -> argparse.ArgumentParser:
                    '| temperature_c]) or rosbag2 bags')
     p.add_argument('--pump', required=True, metavar='BASE.yaml', help='base pump file')
     p.add_argument('--out', required=True, metavar='MY_PUMP.yaml', help='calibrated pump file')
-    p.add_argument('--report', metavar='DIR', default=None, help='report.json and PNG plots')
+    p.add_argument('--report', metavar='DIR', default=None,
+                   help='report.json, report.txt and PNG plots')
     p.add_argument('--fix', nargs='+', default=[], metavar='NAME',
-                   help='hold these at their base values (see docs/calibration.md)')
+                   help='hold these at their base values: ' + ', '.join(FIT_NAMES))
     p.add_argument('--params', metavar='FILE', action='append', default=None,
                    help='node parameters (bags: topics, filter; oil; inertia and drive loss '
                    'start values); may be given several times, later files overriding')
-    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW')
+    p.add_argument('--topic-remap', nargs='+', default=[], metavar='OLD:=NEW',
+                   help="bags: the node's topic OLD is NEW in the bag")
     p.add_argument('--whole-record', action='store_true',
                    help='bags: fit friction on every sample, not only near-steady ones')
     p.add_argument('--force', action='store_true', help='replace an existing output file')
@@ -470,10 +479,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _interrupted() -> int:
     """Report a Ctrl-C (130) or a SIGTERM (143) in one line (`staging.sigint_ignored`)."""
     sigint_ignored()  # a Ctrl-C still pending must not kill us while we report the first
+    done = committed_outputs()  # complete and in place: said, or they look discarded
+    after = f' after writing {", ".join(done)} (complete; nothing else was written)' \
+        if done else ''
     if stop_signal() == signal.SIGTERM:
-        print('pump_friction: terminated', file=sys.stderr)
+        print(f'pump_friction: terminated{after}', file=sys.stderr)
         return 128 + signal.SIGTERM
-    print('pump_friction: interrupted', file=sys.stderr)
+    print(f'pump_friction: interrupted{after}', file=sys.stderr)
     return 130
 
 

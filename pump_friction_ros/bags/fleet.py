@@ -46,7 +46,7 @@ from typing import Any, cast
 from .replay import replay_bag, ReplaySummary
 from .sources import process_context, stop_process
 from ..core.baseline_store import BaselineStore
-from ..core.estimator import estimator_from_config
+from ..core.estimator_setup import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core.inputs import inputs_for, InputSpec
+from ..core.inputs import INPUTS, inputs_for, InputSpec
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError
 from ..messages.cdr import TopicDecoder
@@ -64,15 +64,23 @@ def parse_remaps(items: list[str] | None) -> dict[str, str]:
     Raises
     ------
     BagError
-        A rule without ``:=`` or with an empty side.
+        A rule without ``:=``, with an empty side or a second ``:=``, naming no input of
+        the node, or remapping one twice.
 
     """
     remaps = {}
+    known = {'/' + spec.topic for spec in INPUTS}
     for item in items or []:
         old, sep, new = item.partition(':=')
-        if not sep or not old.strip() or not new.strip():
+        if not sep or not old.strip() or not new.strip() or ':=' in new:
             raise BagError(f'bad --topic-remap {item!r}: expected old:=new')
-        remaps[_absolute(old.strip())] = _absolute(new.strip())
+        old = _absolute(old.strip())
+        if old not in known:  # a typo would leave the input it meant unremapped
+            raise BagError(f'bad --topic-remap {item!r}: the node has no input {old} (its '
+                           f'inputs: {", ".join(sorted(known))})')
+        if old in remaps:
+            raise BagError(f'bad --topic-remap {item!r}: {old} remapped twice')
+        remaps[old] = _absolute(new.strip())
     return remaps
 
 
@@ -146,7 +154,14 @@ def input_topics(config: EstimatorConfig, remaps: dict[str, str] | None = None
 
     """
     remaps = remaps or {}
-    return {remaps.get('/' + spec.topic, '/' + spec.topic): spec for spec in inputs_for(config)}
+    topics: dict[str, InputSpec] = {}
+    for spec in inputs_for(config):
+        topic = remaps.get('/' + spec.topic, '/' + spec.topic)
+        if topic in topics:  # one bag topic cannot be two inputs: one would go unread
+            raise BagError(f'--topic-remap: /{topics[topic].topic} and /{spec.topic} would '
+                           f'both read {topic}')
+        topics[topic] = spec
+    return topics
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,8 @@ from .sources import open_source, ProcessSource, Source
 from .summary import LevelTracker, ReplaySummary
 from ..core.diagnostics import level_message
 from ..core.estimate_record import Estimate, EstimateColumns, MONITOR_COLUMNS
-from ..core.estimator import estimator_from_config, TorqueEstimator
+from ..core.estimator import TorqueEstimator
+from ..core.estimator_setup import estimator_from_config
 from ..core.node_parameters import EstimatorConfig, NODE_NAME
 from ..errors import BagError
 from ..messages.conversions import diagnostic_array, outputs_of, rosbags_types
@@ -256,6 +257,7 @@ _WHY = {
                           'or the joint named twice',
     'rejected_undecodable': 'messages that do not deserialise',
     'rejected_future_stamp': 'header stamps more than max_stamp_lead_s ahead of the log time',
+    'rejected_negative_stamp': 'header stamps before 1970 (negative)',
     'rejected_non_finite': 'NaN or infinite values',
     'rejected_out_of_range': 'implausible values',
     'rejected_out_of_order': 'stamps going back in time',

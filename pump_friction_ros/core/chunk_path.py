@@ -257,7 +257,7 @@ def _estimate_arrays(core: TorqueEstimator, kinds: np.ndarray, stamps: np.ndarra
         return _per_message(core, kinds, stamps, log_times, values, torques, has_value,
                             has_torque, defects)
     counts = core.counts
-    # defects, then stamps too far ahead of their receive time
+    # defects, then stamps too far ahead of their receive time, then stamps before 1970
     if defective.any():
         found, number = np.unique(defects[defective], return_counts=True)
         for defect, count in zip(found.tolist(), number.tolist(), strict=True):
@@ -266,6 +266,10 @@ def _estimate_arrays(core: TorqueEstimator, kinds: np.ndarray, stamps: np.ndarra
     if future.any():
         counts['rejected_future_stamp'] += int(np.count_nonzero(future))
         kind = np.where(future, -1, kind)
+    negative = ~defective & ~future & (stamps < 0)
+    if negative.any():
+        counts['rejected_negative_stamp'] += int(np.count_nonzero(negative))
+        kind = np.where(negative, -1, kind)
     joint = kind == InputKind.JOINT_STATE
     counts['rejected_malformed'] += int(np.count_nonzero(joint & ~has_value & ~has_torque))
 
@@ -318,6 +322,8 @@ def _estimates(core: TorqueEstimator, speed: _Accepted, accel: np.ndarray,
         has_temperature, celsius = _fresh(temperature, q, stamp, core._max_temp_age_ns)
         made = has_dp & has_temperature
     speed_rad_s = speed.values
+    if made.size:  # whether the last speed sample that judged freshness made an estimate
+        core.stale_since_estimate = not made[-1]
     if not made.all():
         stale = np.flatnonzero(~made)
         counts['stale_skips'] += int(stale.size)

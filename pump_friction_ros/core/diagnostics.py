@@ -50,7 +50,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
              stale_timeout_s: float, stale_reason: str, now_ns: int,
              table_viscosity_m2_s: tuple[float, float] | None = None,
              extra: Sequence[tuple[str, float | int | str]] = (), note: str = '',
-             at_last_status: tuple[int, Mapping[str, int]] | None = None
+             at_last_status: tuple[int, Mapping[str, int]] | None = None,
+             max_stamp_lead_s: float = math.inf, clock_stopped: str = ''
              ) -> DiagnosticSnapshot:
     """
     Status at time ``now_ns``.
@@ -66,7 +67,8 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     stale_timeout_s : float
         The ``stale_timeout_s`` parameter [s] (the CUSUM thresholds are the monitor's).
     stale_reason : str
-        Why the latest sample made no estimate.
+        Why the latest speed sample skipped made no estimate; '' when an estimate came after
+        it (inputs that stop then are 'no shaft speed', not a skip of long ago).
     now_ns : int
         Current time of the node's clock (or of the replay) [ns].
     table_viscosity_m2_s : tuple of float, optional
@@ -84,17 +86,34 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
         long ago is not repeated while the samples are now rejected for another; or, when
         estimates were made since but stamped older than the previous status by more than
         ``stale_timeout_s``, that their stamps are of another clock.
+    max_stamp_lead_s : float
+        The ``max_stamp_lead_s`` parameter [s]: an input stamped further ahead of its receipt
+        is rejected, so a latest estimate stamped further ahead of ``now_ns`` means the
+        clock went back (a simulation or a bag restarted): STALE, not its old level.
+    clock_stopped : str
+        Why the node's clock does not advance (simulated time without /clock, or paused);
+        '' when it does. STALE with it, whatever the latest estimate.
 
     Returns
     -------
     DiagnosticSnapshot
-        Level (STALE when no estimate for ``stale_timeout_s``), message, key-values.
+        Level (STALE when no estimate for ``stale_timeout_s``, or the latest stamped more
+        than ``max_stamp_lead_s`` after ``now_ns``: the clock went back), message,
+        key-values.
 
     """
     est = last
     mon = monitor
     age_s = math.inf if est is None else (now_ns - est.stamp_ns) * 1e-9
-    if est is None or age_s > stale_timeout_s:
+    if clock_stopped:
+        level = STALE
+        message = f'stale: {clock_stopped}'
+    elif est is not None and age_s < -max_stamp_lead_s:  # ahead of this clock: not current
+        level = STALE
+        message = (f'stale: the latest estimate is stamped {-age_s:.4g} s after this clock: '
+                   'the clock went back (a simulation or a bag restarted), or the stamps of '
+                   'the inputs are of another clock')
+    elif est is None or age_s > stale_timeout_s:
         level = STALE
         message = 'stale: ' + _stale_why(est, counts, at_last_status, stale_reason, age_s,
                                          round(stale_timeout_s * 1e9))
@@ -188,14 +207,15 @@ def _stale_why(last: Estimate | None, counts: Mapping[str, int],
         # made since the last status, yet stamped stale already then: not a dropout
         return (f'the latest estimate is stamped {age_s:.4g} s before this clock: the header '
                 'stamps of the inputs are of another clock')
-    parts = [stale_reason] if grown['stale_skips'] else []
+    parts = [stale_reason] if grown['stale_skips'] and stale_reason else []
     rejected = [f'{name} {grown[name]}' for name in _REJECTIONS if grown[name]]
     if rejected:
         parts.append(f'samples rejected since the last status ({", ".join(rejected)})')
     if parts:
         return '; '.join(parts)
-    # nothing came since the last status: as of the last skip, or nothing triggers one
-    return stale_reason if last is None or counts['stale_skips'] else 'no shaft speed'
+    # nothing came since the last status: as of the last skip if it came after the latest
+    # estimate, else the speed stopped (nothing triggers a skip)
+    return stale_reason or 'no shaft speed'
 
 
 def level_message(level: int, mon: WearMonitor) -> str:

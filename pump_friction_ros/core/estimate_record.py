@@ -25,8 +25,9 @@ __all__ = ['COUNTERS', 'MONITOR_COLUMNS', 'Estimate', 'EstimateColumns']
 
 COUNTERS = ('estimates', 'stale_skips', 'rejected_non_finite', 'rejected_out_of_order',
             'rejected_duplicate', 'rejected_out_of_range', 'rejected_future_stamp',
-            'rejected_missing_joint', 'rejected_malformed', 'rejected_undecodable',
-            'stamp_resyncs', 'clamped_to_table', 'residuals', 'monitor_samples')
+            'rejected_negative_stamp', 'rejected_missing_joint', 'rejected_malformed',
+            'rejected_undecodable', 'stamp_resyncs', 'clamped_to_table', 'residuals',
+            'monitor_samples')
 """Counters of the estimator, in the order /diagnostics and the replay report them."""
 
 

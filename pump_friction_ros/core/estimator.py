@@ -20,7 +20,8 @@ call per message, whose kinds the table in ``inputs`` lists. Each accepted shaft
 sample triggers an estimate from the latest sample of every other input, provided each is
 within ``max_input_age_s`` of it (sample-and-hold); otherwise no estimate is made and the
 skip is counted. The offline replay hands over many messages at once through `on_chunk`
-(``chunk_path``), with exactly the results of `on_input` per message.
+(``chunk_path``), with exactly the results of `on_input` per message. `estimator_setup`
+builds one from the node's parameters (pump file, table).
 
 Expected input torque = theoretical + friction (table) + J * filtered d(omega)/dt
 + drive loss (opposing the motion), by `model.input_torque_nm`. The derivative is that of
@@ -30,8 +31,9 @@ time and in steady running only (``settled_residual``).
 
 Rejected and counted, never raised: non-finite or implausible values, duplicate or
 out-of-order stamps, header stamps more than ``max_stamp_lead_s`` ahead of the receive
-time, messages without a usable sample (`inputs.Defect`). After ``stamp_resync_samples``
-out-of-order samples of one input in a row its clock is taken as restarted (counted).
+time or negative, messages without a usable sample (`inputs.Defect`). After
+``stamp_resync_samples`` out-of-order samples of one input in a row its clock is taken as
+restarted (counted).
 """
 
 from __future__ import annotations
@@ -67,22 +69,19 @@ from .node_parameters import (
     ViscositySource,
 )
 from .oil_allowance import oil_allowance
-from .oil_range import coverage_warning, table_spec_for
+from .oil_range import coverage_warning
 from .settled_residual import SettledResidual
 from .speed_filter import SpeedFilter
-from ..paths import resolve_path
 from ..physics.friction import smooth_sign_scalar
 from ..physics.model import efficiency_of, input_torque_nm, theoretical_torque_nm
 from ..physics.oil import WaltherViscosity
-from ..physics.pump_parameters import load_pump
 from ..table.exact_lookup import ExactTableLookup
 from ..table.friction_table import FrictionTable
-from ..table.table_files import cached_table, load_table
 
 if TYPE_CHECKING:
     from .baseline_store import BaselineStore
 
-__all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator', 'estimator_from_config']
+__all__ = ['COUNTERS', 'Estimate', 'TorqueEstimator']
 
 
 @dataclass
@@ -178,6 +177,7 @@ class TorqueEstimator:
         self.settled.reset()
         self.last: Estimate | None = None
         self.last_stale_reason = 'no input yet'
+        self.stale_since_estimate = False  # a speed sample skipped stale after the latest
         self._at_status: tuple[int, dict[str, int]] | None = None  # last diagnostics()'s
         self.reset_monitor()
 
@@ -243,6 +243,9 @@ class TorqueEstimator:
         """
         if receive_ns is not None and stamp_ns - receive_ns > self._max_lead_ns:
             self.counts['rejected_future_stamp'] += 1
+            return None
+        if stamp_ns < 0:  # before 1970: no ROS clock reads it (a baseline could not hold it)
+            self.counts['rejected_negative_stamp'] += 1
             return None
         return self._handlers[kind](stamp_ns, value, torque_nm)
 
@@ -359,6 +362,7 @@ class TorqueEstimator:
         if viscosity is None:
             self._stale('no fresh oil temperature')
             return None
+        self.stale_since_estimate = False
         return self._estimate(stamp_ns, speed, dp, viscosity, accel)
 
     # -- internals ------------------------------------------------------------------------
@@ -384,6 +388,7 @@ class TorqueEstimator:
     def _stale(self, reason: str) -> None:
         self.counts['stale_skips'] += 1
         self.last_stale_reason = reason
+        self.stale_since_estimate = True
 
     def _estimate(self, stamp_ns: int, speed: float, dp: float, viscosity: float,
                   accel: float) -> Estimate:
@@ -444,7 +449,7 @@ class TorqueEstimator:
 
     # -- diagnostics ----------------------------------------------------------------------
 
-    def diagnostics(self, now_ns: int) -> DiagnosticSnapshot:
+    def diagnostics(self, now_ns: int, clock_stopped: str = '') -> DiagnosticSnapshot:
         """
         Status for /diagnostics at ``now_ns``; keeps the counters for the next one's message.
 
@@ -452,6 +457,9 @@ class TorqueEstimator:
         ----------
         now_ns : int
             Current time of the node's clock (or of the replay) [ns].
+        clock_stopped : str
+            Why the node's clock does not advance ('' when it does): the status is STALE
+            with it, whatever the latest estimate.
 
         Returns
         -------
@@ -464,37 +472,6 @@ class TorqueEstimator:
         note = '; '.join(x for x in (note, self.monitor.oil_note) if x)
         previous, self._at_status = self._at_status, (now_ns, dict(self.counts))
         return snapshot(self.last, self.monitor, self.counts, self.config.stale_timeout_s,
-                        self.last_stale_reason, now_ns, (float(axis[0]), float(axis[-1])),
-                        extra, note, previous)
-
-
-def estimator_from_config(config: EstimatorConfig) -> TorqueEstimator:
-    """
-    Build the estimator a config describes: pump file, table (given or cached), tuning.
-
-    The cached table's viscosity axis covers the configured oil (``oil_range``); a given
-    ``table_file`` that does not is used all the same, with ``table_coverage`` saying so.
-
-    Parameters
-    ----------
-    config : EstimatorConfig
-        Validated parameters.
-
-    Returns
-    -------
-    TorqueEstimator
-        Ready to take samples.
-
-    Raises
-    ------
-    ConfigError
-        Invalid pump file.
-    TableError
-        Unreadable table, or a table built for another pump or model version.
-
-    """
-    params = load_pump(config.pump_file or None)
-    table = load_table(resolve_path(config.table_file, 'table_file', must_exist=False), params) \
-        if config.table_file else cached_table(
-            params, spec=table_spec_for(config, params.oil.viscosity_m2_s))
-    return TorqueEstimator(config, table, params.oil.viscosity_m2_s, params.name)
+                        self.last_stale_reason if self.stale_since_estimate or
+                        self.last is None else '', now_ns, (float(axis[0]), float(axis[-1])),
+                        extra, note, previous, self.config.max_stamp_lead_s, clock_stopped)

@@ -352,8 +352,22 @@ class ParameterSpec:
     choices: tuple[str, ...] | None = None
     enum: type[_Choice] | None = None
 
-    def convert(self, value: Any, where: str) -> Any:
-        """Return ``value`` converted to the parameter's type, or raise ConfigError."""
+    def convert(self, value: Any, where: str, ros_types: bool = False) -> Any:
+        """
+        Return ``value`` converted to the parameter's type, or raise ConfigError.
+
+        With ``ros_types`` (a parameters file), a number must be of the declared type as
+        rclpy holds it: the node refuses ``1`` for a double and ``2.0`` for an integer.
+        """
+        if ros_types and not isinstance(value, bool) and isinstance(value, (int, float)) \
+                and isinstance(self.default, (int, float)) \
+                and not isinstance(self.default, bool) \
+                and isinstance(value, float) != isinstance(self.default, float):
+            want, write = ('a double', f'{value}.0') if isinstance(self.default, float) \
+                else ('an integer', f'{value:g}')
+            raise ConfigError(f'{where}{self.name}: expected {want}, got {quote(value)}: the '
+                              f'node refuses it (ROS 2 parameters keep their type), write '
+                              f'{write}')
         return _check(self, value, where)
 
 
@@ -446,14 +460,15 @@ def config_from_mapping(values: dict[str, Any], where: str = '',
     return _resolved(_checked(values, where), origins or {}, default_origin)
 
 
-def _checked(values: dict[str, Any], where: str) -> dict[str, Any]:
+def _checked(values: dict[str, Any], where: str, ros_types: bool = False
+             ) -> dict[str, Any]:
     """Return the values converted to their parameters' types, or raise ConfigError."""
     unknown = sorted(map(str, set(values) - set(_SPECS) - {'use_sim_time'}))
     if unknown:
         raise ConfigError(f'{where}unknown parameter(s): '
                           f'{", ".join(quote(u) for u in unknown)}')
-    return {name: _SPECS[name].convert(value, where) for name, value in values.items()
-            if name in _SPECS}
+    return {name: _SPECS[name].convert(value, where, ros_types)
+            for name, value in values.items() if name in _SPECS}
 
 
 def _resolved(checked: dict[str, Any], origins: dict[str, str], default_origin: str
@@ -523,7 +538,8 @@ def load_estimator_config(paths: str | Path | Sequence[str | Path] | None
     merged: dict[str, Any] = {}
     origins: dict[str, str] = {}
     for path in map(Path, paths):
-        values = _checked(_read_params_file(path), f'{path}: ')  # errors name the file
+        # errors name the file; numbers of the node's types, or the node would refuse it
+        values = _checked(_read_params_file(path), f'{path}: ', ros_types=True)
         merged.update(values)
         origins.update(dict.fromkeys(values, f'params file {path}'))
     return _resolved(merged, origins, '')

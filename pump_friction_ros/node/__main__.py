@@ -42,12 +42,16 @@ def main(args: list[str] | None = None) -> int:
     -------
     int
         0 on a normal shutdown (SIGINT, SIGTERM, or the context shut down elsewhere), 1 when
-        the parameters, pump file or table are invalid.
+        the parameters, pump file or table are invalid, or rclpy cannot be imported.
 
     """
     with StopSignals() as stop:
-        from .torque_estimator import run  # rclpy, the messages: after the handler
-
+        try:
+            from .torque_estimator import run  # rclpy, the messages: after the handler
+        except ImportError as exc:  # a shell without ROS 2 sourced
+            print(f'torque_estimator: cannot start: {exc} (the node needs ROS 2 Jazzy: '
+                  'source /opt/ros/jazzy/setup.bash)', file=sys.stderr)
+            return 1
         return run(args, stop)
 
 

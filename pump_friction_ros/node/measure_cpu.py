@@ -445,10 +445,16 @@ def main(argv: list[str] | None = None) -> int:
     Returns
     -------
     int
-        0.
+        0, or 1 without rclpy.
 
     """
     args = _parser().parse_args(argv)
+    try:
+        import rclpy  # noqa: F401  (the role processes use it; here: is it there?)
+    except ImportError as exc:  # a shell without ROS 2 sourced
+        print(f'measure_node_cpu: {exc}: the benchmark runs ROS 2 Jazzy nodes (source '
+              '/opt/ros/jazzy/setup.bash)', file=sys.stderr)
+        return 1
     roles = {'publisher': _role_publisher, 'bare': _role_bare, 'estimator': _role_estimator}
     if args.role is not None:
         roles[args.role](args)

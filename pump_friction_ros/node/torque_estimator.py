@@ -35,6 +35,8 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
+from rclpy.clock import Clock
+from rclpy.clock_type import ClockType
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import (
     InvalidParameterTypeException,
@@ -61,7 +63,7 @@ from std_srvs.srv import Trigger
 from .stop_signals import StopSignals
 from ..core.baseline_store import baseline_path, BaselineStore
 from ..core.estimate_record import Estimate
-from ..core.estimator import estimator_from_config
+from ..core.estimator_setup import estimator_from_config
 from ..core.inputs import (
     FLOAT64,
     FLUID_PRESSURE,
@@ -211,8 +213,15 @@ class TorqueEstimatorNode(Node):
                 self.get_logger().info(f'the middleware reports no incompatible QoS on '
                                        f'{inp.topic}: a best-effort publisher goes unnoticed')
         self.create_service(Trigger, '~/reset_monitor', self._on_reset)
-        # the baseline is saved from the diagnostics timer: no entity more in the wait set
-        self.create_timer(1.0 / cfg.diagnostics_rate_hz, self._on_diagnostics_timer)
+        # the baseline is saved from the diagnostics timer. It runs on the node's clock, as
+        # the replay's does; simulated time that does not advance (no /clock, or paused)
+        # stops it, so a steady timer stands in while it is silent (`_on_clock_watchdog`)
+        period_s = 1.0 / cfg.diagnostics_rate_hz
+        self.create_timer(period_s, self._on_diagnostics_timer)
+        self._silent_after_s = 2.0 * period_s + 0.5  # a late tick is not a stopped clock
+        self._last_tick_s = time.monotonic()
+        self.create_timer(max(period_s, 1.0), self._on_clock_watchdog,
+                          clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._next_save_s = time.monotonic() + cfg.baseline_save_period_s
         self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
         axis_cst = self.core.table.viscosity_axis_m2_s[[0, -1]] * 1e6
@@ -277,9 +286,25 @@ class TorqueEstimatorNode(Node):
         return on_event
 
     def _on_diagnostics_timer(self) -> None:
+        self._last_tick_s = time.monotonic()
+        self._publish_status('')
+
+    def _on_clock_watchdog(self) -> None:
+        """Publish STALE and save on while the node's clock stops the diagnostics timer."""
+        silent_s = time.monotonic() - self._last_tick_s
+        if silent_s < self._silent_after_s or not self.get_parameter('use_sim_time').value:
+            return  # (a system clock never stops: a late tick is a busy executor)
         now = self._now_ns()
-        self._diag_pub.publish(diagnostic_array(self._types, self.core.diagnostics(now), now,
-                                                self._status_name, self.config.hardware_id))
+        why = ('use_sim_time is true and no /clock has come' if now == 0 else
+               f"the node's clock has not advanced for {silent_s:.0f} s (use_sim_time is "
+               'true: /clock stopped or paused)')
+        self._publish_status(why)
+
+    def _publish_status(self, clock_stopped: str) -> None:
+        now = self._now_ns()
+        status = self.core.diagnostics(now, clock_stopped)
+        self._diag_pub.publish(diagnostic_array(self._types, status, now, self._status_name,
+                                                self.config.hardware_id))
         if time.monotonic() >= self._next_save_s:
             self._next_save_s = time.monotonic() + self.config.baseline_save_period_s
             self.save_baseline()

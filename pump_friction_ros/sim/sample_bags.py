@@ -136,7 +136,7 @@ def sample_params_text(cycle: DutyCycle, pump_file: str | None = None) -> str:
     """
     lines = [
         '# Node parameters of the pump simulated in the sample bags (pump_friction',
-        '# make-sample-bags, simulate.DutyCycle): give it after the defaults, e.g.',
+        '# make-sample-bags, sim.duty_cycle.DutyCycle): give it after the defaults, e.g.',
         '#   pump_friction replay bags/eha_nominal --params bags/eha_params.yaml',
         '#   ros2 launch pump_friction_ros torque_estimator.launch.py params_file:=<this file>',
         '/**/torque_estimator:',

@@ -301,7 +301,7 @@ class FrictionTable:
         """
         source = self.metadata.get('source', '<table>')
         rebuild = (f'rebuild it: pump_friction build-table --pump {params.source or "PUMP.yaml"}'
-                   f' --out {source}')
+                   f' --out {source} --force')
         if self.pump_sha256 != params.sha256:
             raise TableError(
                 f'{source}: built for pump "{self.metadata.get("pump_name")}" '
