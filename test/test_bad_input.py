@@ -612,6 +612,7 @@ def test_a_second_ctrl_c_while_reporting_the_first_still_exits_130_with_one_line
 
 CTRL_C_AFTER_THE_COMMIT = """
 import os, signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal, not a runner's
 from pump_friction_ros.app import cli, data_commands
 from pump_friction_ros.staging import StagedOutputs
 

@@ -108,7 +108,7 @@ def snapshot(last: Estimate | None, monitor: WearMonitor, counts: dict[str, int]
     if clock_stopped:
         level = STALE
         message = f'stale: {clock_stopped}'
-    elif est is not None and age_s < -max_stamp_lead_s:  # ahead of this clock: not current
+    elif est is not None and now_ns != 0 and age_s < -max_stamp_lead_s:  # (0: no clock yet)
         level = STALE
         message = (f'stale: the latest estimate is stamped {-age_s:.4g} s after this clock: '
                    'the clock went back (a simulation or a bag restarted), or the stamps of '
