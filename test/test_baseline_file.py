@@ -358,6 +358,10 @@ BROKEN = {
         table, **{'monitor_state.baseline_complete': 'yes'}),
     'stamp_beyond_int64': lambda table: _document_with(
         table, **{'learnt.last_stamp_ns': 10**30}),
+    # a level is an integer as written: int() would have read each of these as one
+    'level_fraction': lambda table: _document_with(table, **{'monitor_state.level': 1.7}),
+    'level_text': lambda table: _document_with(table, **{'monitor_state.level': '2'}),
+    'level_bool': lambda table: _document_with(table, **{'monitor_state.level': True}),
 }
 
 

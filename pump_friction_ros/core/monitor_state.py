@@ -258,9 +258,10 @@ class MonitorPersistence:
         self.change_start_s = start if held else math.nan
         self._pos, self._neg = pos, neg
         self.cusum_pos_nm_s, self.cusum_neg_nm_s = float(pos.max()), float(neg.max())
-        level = int(state['level'])  # type: ignore[call-overload]
-        if level not in (OK, WARN, ERROR):
-            raise ValueError(f'monitor level {level}')
+        level = state['level']  # an integer as written: 1.7, '2' or true are not levels
+        if isinstance(level, bool) or not isinstance(level, int) or \
+                level not in (OK, WARN, ERROR):
+            raise ValueError(f'monitor level {level!r}')
         self.level = level
         if 'last_alarm' in state:  # came later: a file without it has kept none
             self.last_alarm.load(state['last_alarm'])  # type: ignore[arg-type]
