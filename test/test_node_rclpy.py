@@ -185,6 +185,30 @@ def test_with_simulated_time_and_no_clock_diagnostics_go_on_stale_and_say_why(ro
         node.destroy_node()
 
 
+def test_simulated_time_slower_than_real_time_is_not_said_to_stand_still(ros):
+    from rosgraph_msgs.msg import Clock
+    node = ros('use_sim_time:=true', 'diagnostics_rate_hz:=10.0')
+    probe = Probe()
+    clock = probe.create_publisher(Clock, '/clock', 10)
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    ex.add_node(probe)
+    try:
+        sim_ns = 100 * NS
+        end = time.monotonic() + 4.0
+        while time.monotonic() < end:  # a bag played at 0.1x: 10 ms of /clock each 100 ms
+            sim_ns += 10_000_000
+            clock.publish(Clock(clock=Time(sec=sim_ns // NS, nanosec=sim_ns % NS)))
+            spin_until(ex, lambda: False, 0.1)
+        messages = [m.status[0].message for m in probe.diagnostics]
+        assert messages, 'no /diagnostics in 4 s of a slow clock'
+        assert not [m for m in messages if 'has not advanced' in m or 'no /clock' in m]
+    finally:
+        ex.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:

@@ -218,9 +218,10 @@ class TorqueEstimatorNode(Node):
         # stops it, so a steady timer stands in while it is silent (`_on_clock_watchdog`)
         period_s = 1.0 / cfg.diagnostics_rate_hz
         self.create_timer(period_s, self._on_diagnostics_timer)
-        self._silent_after_s = 2.0 * period_s + 0.5  # a late tick is not a stopped clock
-        self._last_tick_s = time.monotonic()
-        self.create_timer(max(period_s, 1.0), self._on_clock_watchdog,
+        # a tick later than this, with the clock where it was, is a stopped clock
+        self._silent_after_s = period_s + cfg.stale_timeout_s
+        self._last_tick_s, self._last_tick_ns = time.monotonic(), self._now_ns()
+        self.create_timer(period_s, self._on_clock_watchdog,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._next_save_s = time.monotonic() + cfg.baseline_save_period_s
         self._status_name = f'{NODE_NAME}: {self.core.pump_name}'
@@ -286,7 +287,7 @@ class TorqueEstimatorNode(Node):
         return on_event
 
     def _on_diagnostics_timer(self) -> None:
-        self._last_tick_s = time.monotonic()
+        self._last_tick_s, self._last_tick_ns = time.monotonic(), self._now_ns()
         self._publish_status('')
 
     def _on_clock_watchdog(self) -> None:
@@ -295,6 +296,8 @@ class TorqueEstimatorNode(Node):
         if silent_s < self._silent_after_s or not self.get_parameter('use_sim_time').value:
             return  # (a system clock never stops: a late tick is a busy executor)
         now = self._now_ns()
+        if now != self._last_tick_ns:  # simulated time slower than real time: it still ticks
+            return
         why = ('use_sim_time is true and no /clock has come' if now == 0 else
                f"the node's clock has not advanced for {silent_s:.0f} s (use_sim_time is "
                'true: /clock stopped or paused)')
