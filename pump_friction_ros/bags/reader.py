@@ -294,16 +294,16 @@ class BagInputs:
         types: dict[str, set[str]] = {}
         for conn in self.reader.connections:
             types.setdefault(conn.topic, set()).add(conn.msgtype)
-        present = {topic: next(iter(found)) for topic, found in types.items()}
         for topic, spec in self.wanted.items():  # only another type: nothing the node reads
             if topic in types and spec.msgtype not in types[topic]:
                 raise BagError(f'bag {self.path}: topic {topic} has type '
                                f'{", ".join(sorted(types[topic]))}, the node expects '
                                f'{spec.msgtype}')
-        missing = [t for t in self.wanted if t not in present]
+        missing = [t for t in self.wanted if t not in types]
         if len(missing) == len(self.wanted):
             expected = ', '.join(f'{t} ({s.msgtype})' for t, s in self.wanted.items())
-            found = ', '.join(f'{t} ({m})' for t, m in sorted(present.items())) or 'none'
+            found = ', '.join(f'{t} ({", ".join(sorted(m))})'
+                              for t, m in sorted(types.items())) or 'none'
             raise BagError(f'bag {self.path}: none of the input topics {expected}; '
                            f'it has {found} (use --topic-remap old:=new)')
         if missing:
