@@ -362,6 +362,17 @@ BROKEN = {
     'level_fraction': lambda table: _document_with(table, **{'monitor_state.level': 1.7}),
     'level_text': lambda table: _document_with(table, **{'monitor_state.level': '2'}),
     'level_bool': lambda table: _document_with(table, **{'monitor_state.level': True}),
+    # a version is an integer as written: true == 1 and 1.0 == 1 in Python
+    'format_version_bool': lambda table: _document_with(table, format_version=True),
+    'format_version_float': lambda table: _document_with(table, format_version=1.0),
+    # sums that no sequence of windows adds up to: windows learnt with no weight, or
+    # weight and sums with no window
+    'learner_windows_no_weight': lambda table: _document_with(
+        table, **{'monitor_state.commissioning.learner.windows': 3}),
+    'learner_weight_no_window': lambda table: _document_with(
+        table, **{'monitor_state.commissioning.learner.weight': 2.0}),
+    'learner_sums_no_window': lambda table: _document_with(
+        table, **{'monitor_state.commissioning.recent.c': 0.5}),
 }
 
 

@@ -396,6 +396,12 @@ class BaselineLearner:
             state, {'a': (N_TERMS, N_TERMS), 'b': (N_TERMS,)},
             ('c', 'weight', 'learnt_s', 'time_sum_s2'), 'baseline', grams=('a',))
         windows = read_count(state, 'windows', 'baseline')
+        # every window adds a positive weight and running: none of them is zero without
+        # the others, and no window leaves the sums at zero
+        if (windows == 0) != (weight == 0.0) or (windows == 0) != (learnt == 0.0) or \
+                (windows == 0 and (c != 0.0 or a.any() or b.any())):
+            raise ValueError(f'baseline sums of {windows} windows with weight {weight!r}, '
+                             f'running {learnt!r} s: not what windows add up to')
         self.a, self.b, self.c, self.weight, self.learnt_s = a, b, c, weight, learnt
         self.time_sum_s2 = time_sum
         self.windows = windows

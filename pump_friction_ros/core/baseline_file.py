@@ -365,7 +365,7 @@ def read_baseline(path: Path) -> dict[str, Any]:
     if not isinstance(doc, dict) or doc.get('format') != BASELINE_FORMAT:
         raise BaselineError(f'{path}: not a {BASELINE_FORMAT} file')
     version = doc.get('format_version')
-    if version != BASELINE_FORMAT_VERSION:
+    if type(version) is not int or version != BASELINE_FORMAT_VERSION:  # (True == 1.0 == 1)
         raise BaselineError(f'{path}: format_version {quote(version)}, this package reads '
                             f'{BASELINE_FORMAT_VERSION}')
     for key in ('learnt', 'provenance', 'monitor_state'):
