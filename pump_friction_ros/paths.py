@@ -170,7 +170,10 @@ def resolve_path(value: str | Path, what: str, *, origin: str = '', pump_set: bo
         if not package or not inner:
             raise ConfigError(f'{what} {quote(text)}{source}: expected '
                               f'package://<package>/<path>')
-        path = package_share_dir(package) / inner
+        try:
+            path = package_share_dir(package) / inner
+        except ConfigError as exc:
+            raise ConfigError(f'{what} {quote(text)}{source}: {exc}') from None
         how = f'in the share folder of {package}'
     elif pump_set and _is_set_name(text):
         path = config_dir() / 'pumps' / f'{text}.yaml'

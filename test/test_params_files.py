@@ -166,6 +166,18 @@ def test_bad_pump_file_values_are_named(tmp_path, value, message):
         load_estimator_config(params_file(tmp_path / 'p.yaml', pump_file=value))
 
 
+@pytest.mark.parametrize('name', ['pump_file', 'table_file'])
+def test_an_unknown_package_in_a_file_parameter_names_the_parameter(tmp_path, name):
+    from pump_friction_ros.core.estimator_setup import estimator_from_config
+    value = 'package://no_such_package_x/config/p.yaml'
+    with pytest.raises(ConfigError) as info:
+        estimator_from_config(load_estimator_config(
+            params_file(tmp_path / 'p.yaml', **{name: value})))
+    message = str(info.value)
+    assert message.startswith(f"{name} '{value}' (from ") and 'package not found' in message
+    assert '\n' not in message
+
+
 def test_the_nodes_file_parameters_resolve_against_its_directory_and_say_so(tmp_path,
                                                                             monkeypatch):
     """What TorqueEstimatorNode does with its declared values (no rclpy needed)."""
