@@ -890,6 +890,60 @@ def test_sample_bags_on_a_full_disk_give_one_line_and_leave_nothing(env, tmp_pat
     assert not out.exists()
 
 
+INLINE_SIZE_LIMITED = """
+import resource, signal, sys
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]), int(sys.argv[1])))
+from pump_friction_ros.bags.replay import replay_bag
+from pump_friction_ros.errors import PumpFrictionError
+try:  # in this process, as a fleet's worker writes (InlineSink, no helper process)
+    replay_bag(sys.argv[2], out_bag=sys.argv[3], storage=sys.argv[4], pipeline=False)
+except PumpFrictionError as exc:
+    print(exc)
+    raise SystemExit(2)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith('linux'), reason='RLIMIT_FSIZE as on Linux')
+@pytest.mark.parametrize(('flag', 'storage', 'limit'), [
+    ('--csv', 'sqlite3', 100000), ('--plots', 'sqlite3', 20000),
+    ('--out', 'sqlite3', 100000), ('--out', 'mcap', 100000),
+])
+def test_a_replay_output_on_a_full_disk_names_its_flag_and_leaves_nothing(
+        env, tmp_path, flag, storage, limit):
+    """Before: 'OSError: [Errno 28] No space left on device' or '... the output bag: ...'."""
+    bag = REPO / 'bags' / 'eha_valve_plate_wear'  # mcap: reading a sqlite3 bag writes too
+    warm = cli(env, 'replay', bag, '--plots', tmp_path / 'warm', '--quiet', timeout=120)
+    assert warm.returncode == 0, warm.stderr  # table and font caches first: only the output
+    out = tmp_path / 'sub' / 'output'
+    proc = subprocess.run([sys.executable, '-c', FILE_SIZE_LIMITED, str(limit), 'replay',
+                           str(bag), flag, str(out), '--storage', storage, '--quiet'],
+                          capture_output=True, text=True, timeout=120, env=env, check=False)
+    refused(proc, f'cannot write the output {flag} {out}: ')
+    assert 'Errno' not in proc.stderr and not (tmp_path / 'sub').exists()
+    if flag == '--out':
+        proc = subprocess.run([sys.executable, '-c', INLINE_SIZE_LIMITED, str(limit), str(bag),
+                               str(out), storage],
+                              capture_output=True, text=True, timeout=120, env=env, check=False)
+        assert proc.returncode == 2, proc.stderr
+        assert proc.stdout.startswith(f'cannot write the output --out {out}: ')
+        assert 'Errno' not in proc.stdout and not (tmp_path / 'sub').exists()
+
+
+@pytest.mark.skipif(not sys.platform.startswith('linux'), reason='RLIMIT_FSIZE as on Linux')
+@pytest.mark.parametrize(('command', 'name'), [('build-table', 't.npz'), ('plot', 'figures')])
+def test_a_model_output_on_a_full_disk_names_its_flag_and_leaves_nothing(
+        env, tmp_path, command, name):
+    warm = cli(env, 'plot', '--out', tmp_path / 'warm', timeout=120)  # the font cache first
+    assert warm.returncode == 0, warm.stderr
+    out = tmp_path / 'sub' / name
+    proc = subprocess.run([sys.executable, '-c', FILE_SIZE_LIMITED, '20000', command, '--out',
+                           str(out)], capture_output=True, text=True, timeout=120, env=env,
+                          check=False)
+    refused(proc, f'cannot write the output --out {out}: ')
+    assert 'Errno' not in proc.stderr and not (tmp_path / 'sub').exists()
+
+
 @pytest.mark.skipif(not Path('/proc/version').is_file(), reason='needs /proc (Linux)')
 def test_reset_baseline_of_a_file_that_cannot_be_moved_says_so_not_moved(env):
     """/proc/version is a file os.replace cannot move (ENOENT): before, 'moved to None', rc 0."""

@@ -263,7 +263,7 @@ def test_an_interrupted_fleet_stops_its_workers_and_leaves_no_partial_output(tmp
 
 
 def sigterm_while_held(conn):
-    from pump_friction_ros.staging import sigint_held
+    from pump_friction_ros.interrupts import sigint_held
     events = []
     signal.signal(signal.SIGTERM, lambda signum, frame: events.append('terminated'))
     with sigint_held():
@@ -282,7 +282,7 @@ def test_a_sigterm_during_a_held_moment_is_delivered_after_it():
 def sigterm_to_another_thread_while_held(conn):
     import threading
 
-    from pump_friction_ros.staging import sigint_held, sigint_kept, stop_signal
+    from pump_friction_ros.interrupts import sigint_held, sigint_kept, stop_signal
     sigint_kept()  # the command's SIGTERM: a Ctrl-C
     events = []
     stop = threading.Event()
@@ -313,7 +313,7 @@ def report_mask(conn):
 
 
 def start_under_the_hold_with_another_default(method, conn):
-    from pump_friction_ros.staging import sigint_held
+    from pump_friction_ros.interrupts import sigint_held
     multiprocessing.set_start_method(method, force=True)
     ctx = sources.process_context()
     mine, theirs = ctx.Pipe(duplex=False)

@@ -94,7 +94,8 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
         write_baseline,
     )
     from ..core.estimator_setup import estimator_from_config
-    from ..staging import note_committed, refuse_at_inputs
+    from ..interrupts import note_committed
+    from ..staging import refuse_at_inputs
 
     out = Path(args.out).expanduser().absolute()
     if out.is_dir():
@@ -178,7 +179,7 @@ def cmd_reset_baseline(args: argparse.Namespace) -> int:
 
     """
     from ..core.baseline_file import archive_baseline, read_baseline
-    from ..staging import note_committed
+    from ..interrupts import note_committed
 
     path = Path(args.file).expanduser().absolute()
     if not path.is_file():

@@ -32,7 +32,14 @@ from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
 from .. import __version__, MODEL_VERSION
 from ..calibration.fit import NAMES as FIT_NAMES
-from ..errors import PumpFrictionError, UsageError
+from ..errors import PumpFrictionError
+from ..interrupts import (
+    committed_outputs,
+    raise_if_interrupted,
+    sigint_ignored,
+    sigint_kept,
+    stop_signal,
+)
 from ..physics.model import COMPONENTS, PumpModel
 from ..physics.pump_parameters import load_pump
 from ..physics.units import (
@@ -42,13 +49,6 @@ from ..physics.units import (
     MM_TO_M,
     rad_s_to_rpm,
     rpm_to_rad_s,
-)
-from ..staging import (
-    committed_outputs,
-    raise_if_interrupted,
-    sigint_ignored,
-    sigint_kept,
-    stop_signal,
 )
 from ..table.friction_table import TableSpec
 
@@ -196,47 +196,6 @@ def _cmd_torque(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_build_table(args: argparse.Namespace) -> int:
-    from ..progress import ProgressBar
-    from ..staging import StagedOutputs
-    from ..table.friction_table import build_table
-    from ..table.table_files import cached_table_path
-
-    params = load_pump(args.pump)
-    base = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
-                     max_pressure_pa=bar_to_pa(args.max_pressure_bar))
-    if args.viscosity_cst is None:  # what the node builds with its default parameters
-        from ..core.node_parameters import EstimatorConfig
-        from ..core.oil_range import table_spec_for
-
-        spec = table_spec_for(EstimatorConfig(), params.oil.viscosity_m2_s, base)
-    else:
-        low_cst, high_cst = args.viscosity_cst
-        if not low_cst < high_cst:  # said in the units given, not after conversion
-            raise UsageError(f'argument --viscosity-cst: LOW must be below HIGH, got {low_cst:g} '
-                             f'{high_cst:g} (see pump_friction build-table --help)')
-        spec = base.covering(cst_to_m2_s(low_cst), cst_to_m2_s(high_cst))
-    outputs = StagedOutputs()
-    try:
-        if args.out:  # checked and made before the build; moved into place at the end
-            staged = outputs.add(args.out, args.force, False)
-            out, path = staged.target, staged.path
-        else:  # the cache is rebuilt in place (it is a cache; saved atomically)
-            out = path = cached_table_path(params, spec)
-        with ProgressBar('building table', enabled=not args.quiet) as bar:
-            table = build_table(params, spec, progress=bar)
-        table.save(path)
-        outputs.commit()
-    except BaseException:
-        outputs.discard()
-        raise
-    shape = 'x'.join(str(n) for n in table.torque_nm.shape[:-1])
-    print(f'{out}: {shape} grid (mode x speed x pressure x viscosity), '
-          f'{table.metadata["build_seconds"]:.2f} s, pump {params.name} '
-          f'sha256 {params.sha256[:12]}')
-    return 0
-
-
 def _cmd_kinematics(args: argparse.Namespace) -> int:
     model = _model(args)
     geom = model.params.geometry
@@ -264,8 +223,9 @@ def _cmd_plot(args: argparse.Namespace) -> int:
     model = _model(args)
     outputs = StagedOutputs()
     try:  # the folder checked and made first, moved into place whole
-        staged = outputs.add(args.out, args.force, True, looks_like=looks_like_plots)
-        names = [path.name for path in write_model_figures(model, staged.path)]
+        staged = outputs.add(args.out, args.force, True, looks_like=looks_like_plots, flag='--out')
+        with staged.writing():
+            names = [path.name for path in write_model_figures(model, staged.path)]
         outputs.commit()
     except BaseException:
         outputs.discard()
@@ -338,7 +298,7 @@ def build_parser() -> argparse.ArgumentParser:
                    'its default parameters, ISO VG 46 from 250 degC to 1000 cSt)')
     p.add_argument('--force', action='store_true', help='replace an existing --out file')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
-    p.set_defaults(func=_cmd_build_table)
+    p.set_defaults(func=data_commands.cmd_build_table)
 
     p = sub.add_parser('kinematics', help='stroke, displacement, piston speeds and forces')
     p.add_argument('--speed-rpm', type=_speed, required=True, metavar='N',
@@ -477,7 +437,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _interrupted() -> int:
-    """Report a Ctrl-C (130) or a SIGTERM (143) in one line (`staging.sigint_ignored`)."""
+    """Report a Ctrl-C (130) or a SIGTERM (143) in one line (`interrupts.sigint_ignored`)."""
     sigint_ignored()  # a Ctrl-C still pending must not kill us while we report the first
     done = committed_outputs()  # complete and in place: said, or they look discarded
     after = f' after writing {", ".join(done)} (complete; nothing else was written)' \

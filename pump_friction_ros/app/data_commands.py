@@ -17,13 +17,14 @@
 from __future__ import annotations
 
 import argparse
+from contextlib import nullcontext
 from pathlib import Path
 
 from ..core.node_parameters import EstimatorConfig
 from ..errors import PumpFrictionError, UsageError
 
-__all__ = ['cmd_calibrate', 'cmd_evaluate_monitor', 'cmd_make_sample_bags', 'cmd_replay',
-           'estimator_config']
+__all__ = ['cmd_build_table', 'cmd_calibrate', 'cmd_evaluate_monitor', 'cmd_make_sample_bags',
+           'cmd_replay', 'estimator_config']
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
@@ -169,3 +170,47 @@ def cmd_evaluate_monitor(args: argparse.Namespace) -> int:
                             seed=args.seed, progress=not args.quiet,
                             next_morning=args.next_morning, force=args.force,
                             held_out=args.held_out)
+
+
+def cmd_build_table(args: argparse.Namespace) -> int:
+    """Run ``pump_friction build-table``: into the cache, or into ``--out``."""
+    from ..physics.pump_parameters import load_pump
+    from ..physics.units import bar_to_pa, cst_to_m2_s, rpm_to_rad_s
+    from ..progress import ProgressBar
+    from ..staging import StagedOutputs
+    from ..table.friction_table import build_table, TableSpec
+    from ..table.table_files import cached_table_path
+
+    params = load_pump(args.pump)
+    base = TableSpec(max_speed_rad_s=rpm_to_rad_s(args.max_speed_rpm),
+                     max_pressure_pa=bar_to_pa(args.max_pressure_bar))
+    if args.viscosity_cst is None:  # what the node builds with its default parameters
+        from ..core.oil_range import table_spec_for
+
+        spec = table_spec_for(EstimatorConfig(), params.oil.viscosity_m2_s, base)
+    else:
+        low_cst, high_cst = args.viscosity_cst
+        if not low_cst < high_cst:  # said in the units given, not after conversion
+            raise UsageError(f'argument --viscosity-cst: LOW must be below HIGH, got {low_cst:g} '
+                             f'{high_cst:g} (see pump_friction build-table --help)')
+        spec = base.covering(cst_to_m2_s(low_cst), cst_to_m2_s(high_cst))
+    outputs = StagedOutputs()
+    try:
+        if args.out:  # checked and made before the build; moved into place at the end
+            staged = outputs.add(args.out, args.force, False, flag='--out')
+            out, path = staged.target, staged.path
+        else:  # the cache is rebuilt in place (it is a cache; saved atomically)
+            out = path = cached_table_path(params, spec)
+        with ProgressBar('building table', enabled=not args.quiet) as bar:
+            table = build_table(params, spec, progress=bar)
+        with staged.writing() if args.out else nullcontext():
+            table.save(path)
+        outputs.commit()
+    except BaseException:
+        outputs.discard()
+        raise
+    shape = 'x'.join(str(n) for n in table.torque_nm.shape[:-1])
+    print(f'{out}: {shape} grid (mode x speed x pressure x viscosity), '
+          f'{table.metadata["build_seconds"]:.2f} s, pump {params.name} '
+          f'sha256 {params.sha256[:12]}')
+    return 0

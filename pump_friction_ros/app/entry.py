@@ -61,7 +61,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if ours:
             signal.signal(signal.SIGINT, note)
         from .cli import main as run
-        if ours:  # cli.main installs its own (`staging.sigint_kept`) over Python's
+        if ours:  # cli.main installs its own (`interrupts.sigint_kept`) over Python's
             signal.signal(signal.SIGINT, signal.default_int_handler)
     except BaseException:
         if not noted:

@@ -50,13 +50,8 @@ from ..core.estimator_setup import estimator_from_config
 from ..core.monitor import LEVEL_NAMES
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError, PumpFrictionError, UsageError
-from ..staging import (
-    raise_if_interrupted,
-    refuse_at_inputs,
-    remove_empty_folders,
-    sigint_held,
-    sigterm_kept,
-)
+from ..interrupts import raise_if_interrupted, sigint_held, sigterm_kept
+from ..staging import refuse_at_inputs, remove_empty_folders
 
 __all__ = ['FleetOutputs', 'ReplayJob', 'discover_bags', 'fleet_table', 'output_names',
            'plan_outputs', 'refuse_repeats', 'run_job', 'run_jobs']

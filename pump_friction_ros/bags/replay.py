@@ -35,7 +35,7 @@ import csv
 import math
 from pathlib import Path
 import time
-from typing import Any, TextIO
+from typing import Any
 
 import numpy as np
 
@@ -58,17 +58,11 @@ from ..core.estimator import TorqueEstimator
 from ..core.estimator_setup import estimator_from_config
 from ..core.node_parameters import EstimatorConfig, NODE_NAME
 from ..errors import BagError
+from ..interrupts import raise_if_interrupted, sigint_held
 from ..messages.conversions import diagnostic_array, outputs_of, rosbags_types
 from ..physics.model import efficiency_of
 from ..progress import ProgressBar
-from ..staging import (
-    looks_like_bag,
-    looks_like_plots,
-    raise_if_interrupted,
-    sigint_held,
-    Staged,
-    StagedOutputs,
-)
+from ..staging import looks_like_bag, looks_like_plots, NamedErrorsFile, Staged, StagedOutputs
 
 __all__ = ['CSV_COLUMNS', 'ReplayBatch', 'ReplayEvent', 'ReplaySummary', 'bag_estimates',
            'replay_bag', 'replay_batches', 'replay_events']
@@ -215,16 +209,17 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
         def stage(path: str | Path | None, is_dir: bool, **kwargs: Any) -> Staged | None:
             return None if path is None else staged.add(path, force, is_dir, **kwargs)
 
-        out = stage(out_bag, True, create=False, looks_like=looks_like_bag)  # the sink makes it
-        table = stage(csv_path, False)
-        figs = stage(plots_dir, True, looks_like=looks_like_plots)
+        out = stage(out_bag, True, create=False, looks_like=looks_like_bag,  # the sink makes it
+                    flag='--out')
+        table = stage(csv_path, False, flag='--csv')
+        figs = stage(plots_dir, True, looks_like=looks_like_plots, flag='--plots')
         if out is not None:
             out_storage = storage or source.meta.storage
             sink = open_sink(str(out.path), out_storage, pipelined,
-                             output_compression(compression, out_storage, source.meta))
+                             output_compression(compression, out_storage, source.meta),
+                             f'{out.flag} {out.target}')
         with ExitStack() as stack:
-            csv_file = stack.enter_context(open(table.path, 'w', newline='')) if table \
-                else None
+            csv_file = stack.enter_context(table.open_text()) if table else None
             series = _run(source, core, config, summary, sink, csv_file, keep_estimates,
                           progress, figs is not None)
         if summary.estimates == 0:  # every sample skipped: say why rather than write nothing
@@ -234,7 +229,8 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
             sink = None
         if figs is not None:
             from .replay_figures import write_replay_figures
-            write_replay_figures(series.data, figs.path, Path(bag).name, config)
+            with figs.writing():
+                write_replay_figures(series.data, figs.path, Path(bag).name, config)
         staged.commit()
         for item, kind in ((out, 'bag'), (table, 'csv'), (figs, 'plots')):
             if item is not None:
@@ -282,8 +278,8 @@ def _no_estimate_message(summary: ReplaySummary, core: TorqueEstimator) -> str:
 
 
 def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
-         summary: ReplaySummary, sink: Sink | None, csv_file: TextIO | None, keep_estimates: bool,
-         progress: bool, plots: bool) -> _Series:
+         summary: ReplaySummary, sink: Sink | None, csv_file: NamedErrorsFile | None,
+         keep_estimates: bool, progress: bool, plots: bool) -> _Series:
     """
     Consume `replay_batches`: outputs, CSV rows, level intervals, the summary.
 

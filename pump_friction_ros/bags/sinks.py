@@ -173,22 +173,35 @@ def _open_writer(path: str, storage: str, compression: str) -> tuple[Any, list[A
     return writer, connections
 
 
+def _cannot_write(name: str, exc: BaseException) -> str:
+    """Return the one line for a failed output bag: ``name`` and the reason, no errno."""
+    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+    return f'cannot write the output {name or "bag"}: {reason or type(exc).__name__}'
+
+
 class InlineSink:
     """Writes the output bag in this process."""
 
-    def __init__(self, path: str, storage: str, compression: str = '') -> None:
+    def __init__(self, path: str, storage: str, compression: str = '', name: str = '') -> None:
+        self._name = name
         try:
             self._writer, self._connections = _open_writer(path, storage, compression)
         except Exception as exc:
-            raise BagError(f'cannot write the output bag: {exc}') from exc
+            raise BagError(_cannot_write(name, exc)) from exc
 
     def write(self, index: int, log_ns: int, payload: bytes) -> None:
-        """Write one message."""
-        self._writer.write(self._connections[index], log_ns, payload)
+        """Write one message (a full disk: BagError naming the output)."""
+        try:
+            self._writer.write(self._connections[index], log_ns, payload)
+        except Exception as exc:  # OSError (mcap), sqlite3.Error, rosbags' WriterError
+            raise BagError(_cannot_write(self._name, exc)) from exc
 
     def close(self) -> None:
-        """Finish the bag."""
-        self._writer.close()
+        """Finish the bag (BagError naming the output if it could not be written)."""
+        try:
+            self._writer.close()
+        except Exception as exc:
+            raise BagError(_cannot_write(self._name, exc)) from exc
 
     def abort(self) -> None:
         """Close what can be closed; the staged output is discarded anyway."""
@@ -199,7 +212,7 @@ class InlineSink:
 
 
 def _writer_process(conn: Any, parent_end: Any, path: str, storage: str,
-                    compression: str) -> None:
+                    compression: str, name: str) -> None:
     """Write the batches received into the output bag (in a helper process)."""
     child_signals()
     parent_end.close()  # our inherited copy: the parent closing its end must reach us
@@ -220,7 +233,7 @@ def _writer_process(conn: Any, parent_end: Any, path: str, storage: str,
         return  # the parent aborted
     except Exception as exc:
         try:
-            conn.send(('error', f'cannot write the output bag: {exc}'))
+            conn.send(('error', _cannot_write(name, exc)))
         except (BrokenPipeError, OSError):
             pass
     finally:
@@ -230,11 +243,11 @@ def _writer_process(conn: Any, parent_end: Any, path: str, storage: str,
 class ProcessSink:
     """Writes the output bag in a helper process, in batches, while the core runs."""
 
-    def __init__(self, path: str, storage: str, compression: str = '') -> None:
+    def __init__(self, path: str, storage: str, compression: str = '', name: str = '') -> None:
         ctx = process_context()
         self._conn, child = ctx.Pipe(duplex=True)
         self._proc = ctx.Process(target=_writer_process,
-                                 args=(child, self._conn, path, storage, compression),
+                                 args=(child, self._conn, path, storage, compression, name),
                                  daemon=True)
         start_helper(self._proc, child, self.abort)
         self._batch: tuple[list[int], list[int], list[bytes]] = ([], [], [])
@@ -281,7 +294,8 @@ class ProcessSink:
         stop_process(self._proc)
 
 
-def open_sink(path: str, storage: str, pipeline: bool, compression: str = '') -> Sink:
+def open_sink(path: str, storage: str, pipeline: bool, compression: str = '',
+              name: str = '') -> Sink:
     """
     Open the output bag writer.
 
@@ -295,6 +309,8 @@ def open_sink(path: str, storage: str, pipeline: bool, compression: str = '') ->
         Write in a helper process.
     compression : {'', 'file', 'message', 'storage'}
         zstd compression mode (`output_compression`); '' for none.
+    name : str, optional
+        The output as the messages name it (``--out out/replayed``; default ``bag``).
 
     Returns
     -------
@@ -302,4 +318,4 @@ def open_sink(path: str, storage: str, pipeline: bool, compression: str = '') ->
         The writer.
 
     """
-    return (ProcessSink if pipeline else InlineSink)(path, storage, compression)
+    return (ProcessSink if pipeline else InlineSink)(path, storage, compression, name)

@@ -33,7 +33,7 @@ from typing import Any, Protocol, TYPE_CHECKING
 from .reader import BagInputs, BagMeta, Chunk, ReadStats
 from ..core.node_parameters import EstimatorConfig
 from ..errors import BagError
-from ..staging import sigint_held
+from ..interrupts import sigint_held
 
 if TYPE_CHECKING:  # (no ForkContext on Windows)
     from multiprocessing.context import DefaultContext, ForkContext
@@ -85,7 +85,7 @@ def process_context() -> ForkContext | DefaultContext:
     """
     Return how helper and fleet processes start: forked, where the platform has fork.
 
-    They are started under `staging.sigint_held` and rely on a forked child inheriting the
+    They are started under `interrupts.sigint_held` and rely on a forked child inheriting the
     blocked signals until it sets its own handlers (`child_signals`). Forkserver (Python
     3.14's default on Linux) and spawn start the child from another process, whose mask is
     not this thread's: a Ctrl-C in that instant would raise in the child. Elsewhere (macOS,
@@ -106,7 +106,7 @@ def child_signals() -> None:
     """In a helper process: default SIGTERM, and Ctrl-C left to the parent (it stops us)."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    # started under `staging.sigint_held`: both signals blocked until now
+    # started under `interrupts.sigint_held`: both signals blocked until now
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
 
 

@@ -123,9 +123,11 @@ def calibrate(inputs: list[str | Path], base_file: str | Path, out_file: str | P
             refuse_at_inputs(flag, target, inputs)
     staged = StagedOutputs()
     try:
-        pump_out = None if out_file is None else staged.add(out_file, force, False)
+        pump_out = None if out_file is None else staged.add(out_file, force, False,
+                                                            flag='--out')
         report_out = None if report_dir is None else staged.add(
-            report_dir, force, True, looks_like=lambda p: (p / 'report.json').is_file())
+            report_dir, force, True, looks_like=lambda p: (p / 'report.json').is_file(),
+            flag='--report')
         result = _calibrate(inputs, base_file, pump_out, report_out, fix, config, remaps,
                             steady_only)
         staged.commit()
@@ -216,7 +218,9 @@ def _calibrate(inputs: list[str | Path], base_file: str | Path, pump_out: Staged
         cv_rmse_nm=cross_validate(x, y, theta0, free, upper, samples.block),
         noise_std_nm=linear.noise_std_nm, warnings=warnings, fitted=fitted)
     if pump_out is not None:
-        write_pump_file(Path(base_file), pump_out.path, fitted, result, samples, fix)
+        with pump_out.writing():
+            write_pump_file(Path(base_file), pump_out.path, fitted, result, samples, fix)
     if report_out is not None:
-        write_report(report_out.path, result, samples, before, after)
+        with report_out.writing():
+            write_report(report_out.path, result, samples, before, after)
     return result

@@ -111,16 +111,18 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
     try:
         if next_morning:  # one file, beside a bank's outputs in the same folder if any
             staged = None if out is None else outputs.add(Path(out) / NEXT_MORNING_FILE,
-                                                          force, False)
+                                                          force, False, flag='--out')
             table = format_next_mornings(run_next_mornings(settings, [seed], workers), [seed])
             print(table)  # (printed before it is written: a failed write loses nothing)
             if staged is not None:
-                staged.path.write_text(table + '\n', encoding='utf-8')
+                with staged.writing():
+                    staged.path.write_text(table + '\n', encoding='utf-8')
                 outputs.commit()
                 print(staged.target)
             return 0
         staged = None if out is None else outputs.add(out, force, True,
-                                                      looks_like=looks_like_evaluation)
+                                                      looks_like=looks_like_evaluation,
+                                                      flag='--out')
         with ProgressBar(f'evaluate-monitor ({settings.name})', enabled=progress) as bar:
             result = run_bank(settings, workers=workers, seed=seed,
                               progress=lambda done, total: bar(done / total))
@@ -128,7 +130,8 @@ def evaluate_monitor(quick: bool = False, workers: int = 1, out: str | Path | No
         table = format_table(figures, result)
         print(table)
         if staged is not None:
-            written = write_outputs(result, figures, table, staged.path)
+            with staged.writing():
+                written = write_outputs(result, figures, table, staged.path)
             _commit(outputs, staged, [path.name for path in written])
     except BaseException:
         outputs.discard()
