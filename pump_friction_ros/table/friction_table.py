@@ -40,6 +40,7 @@ from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from functools import cached_property
+import io
 import json
 import math
 import os
@@ -331,14 +332,17 @@ class FrictionTable:
         """
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
+        # the archive is made in memory and written at once: a zip file that a full disk
+        # broke would complain from its finaliser (numpy 1.26: "seek of closed file")
+        archive = io.BytesIO()
+        np.savez(archive, speed_axis_rad_s=self.speed_axis_rad_s,
+                 pressure_axis_pa=self.pressure_axis_pa,
+                 viscosity_axis_m2_s=self.viscosity_axis_m2_s, torque_nm=self.torque_nm,
+                 metadata=np.array(json.dumps(self.metadata, sort_keys=True)))
         fd, tmp = tempfile.mkstemp(prefix=path.name + '.', suffix='.tmp', dir=path.parent)
         try:
             with os.fdopen(fd, 'wb') as handle:
-                np.savez(handle, speed_axis_rad_s=self.speed_axis_rad_s,
-                         pressure_axis_pa=self.pressure_axis_pa,
-                         viscosity_axis_m2_s=self.viscosity_axis_m2_s,
-                         torque_nm=self.torque_nm,
-                         metadata=np.array(json.dumps(self.metadata, sort_keys=True)))
+                handle.write(archive.getbuffer())
             os.replace(tmp, path)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
