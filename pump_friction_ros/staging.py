@@ -38,8 +38,9 @@ from .errors import OutputError, UsageError
 from .input_files import special_kind
 from .interrupts import note_committed, raise_if_interrupted, sigint_held
 
-__all__ = ['NamedErrorsFile', 'Staged', 'StagedOutputs', 'commit_all', 'discard_all',
-           'looks_like_bag', 'looks_like_plots', 'refuse_at_inputs', 'remove_empty_folders']
+__all__ = ['NamedErrorsFile', 'Staged', 'StagedOutputs', 'cannot_write', 'commit_all',
+           'discard_all', 'looks_like_bag', 'looks_like_plots', 'refuse_at_inputs',
+           'remove_empty_folders']
 
 
 def looks_like_bag(path: Path) -> bool:
@@ -54,6 +55,27 @@ def looks_like_plots(path: Path) -> bool:
 
 def _reason(exc: OSError) -> str:
     return exc.strerror or type(exc).__name__
+
+
+def cannot_write(name: str, exc: BaseException) -> str:
+    """
+    Return the one line for an output that could not be written: its name and the reason.
+
+    Parameters
+    ----------
+    name : str
+        The output as the command line named it (``--csv out/e.csv``).
+    exc : BaseException
+        The error: an OSError says its reason without the errno, another its text.
+
+    Returns
+    -------
+    str
+        ``cannot write the output <name>: <reason>``.
+
+    """
+    reason = _reason(exc) if isinstance(exc, OSError) else str(exc) or type(exc).__name__
+    return f'cannot write the output {name}: {reason}'
 
 
 def remove_empty_folders(folders: list[Path]) -> None:
@@ -213,9 +235,12 @@ class Staged:
         try:
             yield
         except OSError as exc:
-            flag = f'{self.flag} ' if self.flag else ''
-            raise OutputError(f'cannot write the output {flag}{self.target}: '
-                              f'{_reason(exc)}') from None
+            raise OutputError(cannot_write(self.name, exc)) from None
+
+    @property
+    def name(self) -> str:
+        """Return the output as the messages name it: the option and the target as given."""
+        return f'{self.flag} {self.target}' if self.flag else str(self.target)
 
     def open_text(self) -> NamedErrorsFile:
         """
@@ -268,15 +293,8 @@ class NamedErrorsFile:
 
     def close(self) -> None:
         """Flush and close the file (`Staged.writing`'s error on failure)."""
-        try:
-            with self._staged.writing():
-                self._file.close()
-        finally:
-            if not self._file.closed:  # the flush failed: the descriptor still goes
-                try:
-                    self._file.close()
-                except OSError:
-                    pass
+        with self._staged.writing():  # (closed even when the flush fails)
+            self._file.close()
 
     def __enter__(self) -> NamedErrorsFile:
         return self

@@ -217,7 +217,7 @@ def replay_bag(bag: str | Path, config: EstimatorConfig | None = None, *,
             out_storage = storage or source.meta.storage
             sink = open_sink(str(out.path), out_storage, pipelined,
                              output_compression(compression, out_storage, source.meta),
-                             f'{out.flag} {out.target}')
+                             out.name)
         with ExitStack() as stack:
             csv_file = stack.enter_context(table.open_text()) if table else None
             series = _run(source, core, config, summary, sink, csv_file, keep_estimates,

@@ -23,6 +23,7 @@ node's: reliable, keep last, volatile) and the compression chosen by `output_com
 
 from __future__ import annotations
 
+import sqlite3
 from typing import Any, Protocol
 
 from .reader import BagMeta
@@ -35,6 +36,7 @@ from ..messages.conversions import (
     OUTPUT_QOS_DEPTH,
     OUTPUT_TOPICS,
 )
+from ..staging import cannot_write
 
 __all__ = ['COMPRESSION_CHOICES', 'DIAGNOSTICS_INDEX', 'OUTPUT_INDEX', 'InlineSink',
            'ProcessSink', 'Sink', 'float64_cdr', 'open_sink', 'output_compression',
@@ -173,10 +175,11 @@ def _open_writer(path: str, storage: str, compression: str) -> tuple[Any, list[A
     return writer, connections
 
 
-def _cannot_write(name: str, exc: BaseException) -> str:
-    """Return the one line for a failed output bag: ``name`` and the reason, no errno."""
-    reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-    return f'cannot write the output {name or "bag"}: {reason or type(exc).__name__}'
+def _write_errors() -> tuple[type[Exception], ...]:
+    """Return what a bag writer raises when the disk will not take the bag."""
+    from rosbags.rosbag2 import WriterError
+
+    return OSError, sqlite3.Error, WriterError  # mcap's file, sqlite3's, rosbags' own
 
 
 class InlineSink:
@@ -187,21 +190,21 @@ class InlineSink:
         try:
             self._writer, self._connections = _open_writer(path, storage, compression)
         except Exception as exc:
-            raise BagError(_cannot_write(name, exc)) from exc
+            raise BagError(cannot_write(name or 'bag', exc)) from exc
 
     def write(self, index: int, log_ns: int, payload: bytes) -> None:
         """Write one message (a full disk: BagError naming the output)."""
         try:
             self._writer.write(self._connections[index], log_ns, payload)
-        except Exception as exc:  # OSError (mcap), sqlite3.Error, rosbags' WriterError
-            raise BagError(_cannot_write(self._name, exc)) from exc
+        except _write_errors() as exc:  # a full disk, say
+            raise BagError(cannot_write(self._name or 'bag', exc)) from exc
 
     def close(self) -> None:
         """Finish the bag (BagError naming the output if it could not be written)."""
         try:
             self._writer.close()
-        except Exception as exc:
-            raise BagError(_cannot_write(self._name, exc)) from exc
+        except _write_errors() as exc:
+            raise BagError(cannot_write(self._name or 'bag', exc)) from exc
 
     def abort(self) -> None:
         """Close what can be closed; the staged output is discarded anyway."""
@@ -233,7 +236,7 @@ def _writer_process(conn: Any, parent_end: Any, path: str, storage: str,
         return  # the parent aborted
     except Exception as exc:
         try:
-            conn.send(('error', _cannot_write(name, exc)))
+            conn.send(('error', cannot_write(name or 'bag', exc)))
         except (BrokenPipeError, OSError):
             pass
     finally:
