@@ -340,6 +340,19 @@ def test_metadata_claiming_no_messages_does_not_hide_the_storages(env, tmp_path)
     assert '/joint_states 3000, /load_pressure 1500' in proc.stdout
 
 
+def test_metadata_listing_a_storage_file_twice_is_refused_not_read_twice(env, tmp_path):
+    import yaml
+
+    bag = write_bag(tmp_path / 'bag', n=3000)
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())
+    info = meta['rosbag2_bagfile_information']
+    name = info['relative_file_paths'][0]
+    info['relative_file_paths'] = [name, f'elsewhere/{name}']  # rosbags reads the base name
+    (bag / 'metadata.yaml').write_text(yaml.safe_dump(meta))
+    refused(cli(env, 'replay', bag, '--out', tmp_path / 'out'), 'metadata.yaml', 'twice', name)
+    assert not (tmp_path / 'out').exists()
+
+
 # -- outputs that cannot be made: one line naming the target, nothing half-written ---------
 
 BENCH = REPO / 'config' / 'examples' / 'bench_example.csv'

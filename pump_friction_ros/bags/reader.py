@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 import struct
 from typing import Any
 
@@ -233,8 +233,8 @@ class BagInputs:
     Raises
     ------
     BagError
-        Missing path, not a bag, unreadable or corrupt storage, no input topics, or an input
-        topic of the wrong type.
+        Missing path, not a bag, unreadable or corrupt storage, a metadata.yaml listing a
+        storage file twice, no input topics, or an input topic of the wrong type.
 
     """
 
@@ -263,6 +263,7 @@ class BagInputs:
             raise BagError(f'cannot read bag {self.path}: corrupt or truncated storage '
                            f'({type(exc).__name__}: {one_line(exc)})') from exc
         try:
+            self._check_storage_files()
             self.wanted = input_topics(config, remaps)
             self._check_topics()
         except BagError:
@@ -287,6 +288,21 @@ class BagInputs:
         """Storage of the bag, 'mcap' or 'sqlite3', from its file names."""
         files = [self.path] if self.path.is_file() else list(self.path.iterdir())
         return 'mcap' if any('.mcap' in p.name for p in files) else 'sqlite3'
+
+    def _check_storage_files(self) -> None:
+        """Refuse a metadata.yaml that lists a storage file twice (rosbags reads it twice)."""
+        if not self.path.is_dir():
+            return
+        from ruamel.yaml import YAML
+
+        meta = YAML(typ='safe').load((self.path / 'metadata.yaml').read_text())
+        names = [PurePath(str(x)).name
+                 for x in meta['rosbag2_bagfile_information']['relative_file_paths']]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise BagError(f'bag {self.path}: metadata.yaml lists {", ".join(twice)} twice '
+                           '(a corrupt or hand-edited metadata.yaml; `ros2 bag reindex` '
+                           'rebuilds it)')
 
     def _check_topics(self) -> None:
         if self.reader.message_count == 0 and not self._has_any_message():
