@@ -487,6 +487,14 @@ def test_archive_moves_the_file_aside_and_keeps_earlier_backups(tmp_path):
         archive_baseline(tmp_path)
 
 
+def test_archive_never_moves_a_named_pipe_or_device_aside(tmp_path):
+    fifo = tmp_path / 'baseline.yaml'
+    os.mkfifo(fifo)
+    with pytest.raises(OutputError, match='not a regular file'):
+        archive_baseline(fifo)
+    assert fifo.is_fifo() and os.listdir(tmp_path) == ['baseline.yaml']
+
+
 def test_default_file_is_under_ros_home_named_after_the_node(monkeypatch, tmp_path):
     monkeypatch.setenv('ROS_HOME', str(tmp_path))
     assert default_baseline_path('/eha1/torque_estimator') == \

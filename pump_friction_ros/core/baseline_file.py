@@ -471,11 +471,15 @@ def archive_baseline(path: Path) -> Path | None:
     Raises
     ------
     OutputError
-        It is a folder or cannot be moved (one line, with the reason).
+        It is a folder or not a regular file, or cannot be moved (one line, with the
+        reason).
 
     """
     if path.is_dir():
         raise OutputError(f'baseline file {path} is a folder: not moved aside')
+    if path.exists() and not path.is_file():  # a reset must never replace /dev/null
+        raise OutputError(f'baseline file {path} is not a regular file (a device, a named '
+                          'pipe or a socket): not moved aside')
     stamp = time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())
     target = path.with_name(f'{path.name}.{stamp}.bak')
     n = 1
