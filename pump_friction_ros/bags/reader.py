@@ -32,8 +32,9 @@ import numpy as np
 
 from ..core.inputs import INPUTS, inputs_for, InputSpec
 from ..core.node_parameters import EstimatorConfig
-from ..errors import BagError
+from ..errors import BagError, ConfigError
 from ..messages.cdr import TopicDecoder
+from ..yaml_files import read_yaml
 
 __all__ = ['BagInputs', 'BagMeta', 'Chunk', 'ReadStats', 'input_topics', 'mcap_chunk_compression',
            'one_line', 'parse_remaps']
@@ -293,9 +294,11 @@ class BagInputs:
         """Refuse a metadata.yaml that lists a storage file twice (rosbags reads it twice)."""
         if not self.path.is_dir():
             return
-        from ruamel.yaml import YAML
-
-        meta = YAML(typ='safe').load((self.path / 'metadata.yaml').read_text())
+        try:
+            meta = read_yaml(self.path / 'metadata.yaml', 'bag metadata', ros_numbers=False,
+                             unique_keys=False)
+        except ConfigError as exc:
+            raise BagError(f'cannot read bag {self.path}: {exc}') from None
         names = [PurePath(str(x)).name
                  for x in meta['rosbag2_bagfile_information']['relative_file_paths']]
         twice = sorted({n for n in names if names.count(n) > 1})
