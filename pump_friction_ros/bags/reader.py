@@ -298,7 +298,7 @@ class BagInputs:
             meta = read_yaml(self.path / 'metadata.yaml', 'bag metadata', ros_numbers=False,
                              unique_keys=False)
         except ConfigError as exc:
-            raise BagError(f'cannot read bag {self.path}: {exc}') from None
+            raise BagError(f'cannot read bag {self.path}: {exc}') from exc
         names = [PurePath(str(x)).name
                  for x in meta['rosbag2_bagfile_information']['relative_file_paths']]
         twice = sorted({n for n in names if names.count(n) > 1})
