@@ -209,6 +209,41 @@ def test_simulated_time_slower_than_real_time_is_not_said_to_stand_still(ros):
         node.destroy_node()
 
 
+@pytest.mark.parametrize('jump_back_s', [0.0, 900.0], ids=['paused', 'jumped-back-then-paused'])
+def test_a_clock_paused_between_two_diagnostics_ticks_goes_on_stale_and_says_why(ros, jump_back_s):
+    """ros2 bag play paused (space), mid-period: the clock stands still off any tick's value."""
+    from rosgraph_msgs.msg import Clock
+    node = ros('use_sim_time:=true', 'diagnostics_rate_hz:=10.0')
+    probe = Probe()
+    clock = probe.create_publisher(Clock, '/clock', 10)
+    ex = SingleThreadedExecutor()
+    ex.add_node(node)
+    ex.add_node(probe)
+
+    def tick(ns):
+        clock.publish(Clock(clock=Time(sec=ns // NS, nanosec=ns % NS)))
+        spin_until(ex, lambda: False, 0.01)
+
+    try:
+        sim_ns = 1000 * NS
+        end = time.monotonic() + 2.0
+        while time.monotonic() < end:  # about real-time rate: 10 ms of /clock each 10 ms
+            sim_ns += 10_000_000
+            tick(sim_ns)
+        tick(sim_ns - int(jump_back_s * NS) + 3_000_000)  # 3 ms on (or back), then pause
+        running = len(probe.diagnostics)
+        assert running >= 2, 'the diagnostics timer did not tick on a running /clock'
+        spin_until(ex, lambda: False, 3.0)
+        messages = [m.status[0].message for m in probe.diagnostics[running:]]
+        stale = [m for m in messages if m.startswith('stale: ') and 'has not advanced' in m]
+        assert stale, f'no STALE in 3 s of a paused clock: {messages}'
+        assert '/clock stopped or paused' in stale[-1]
+    finally:
+        ex.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:

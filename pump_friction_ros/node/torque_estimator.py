@@ -220,7 +220,10 @@ class TorqueEstimatorNode(Node):
         self.create_timer(period_s, self._on_diagnostics_timer)
         # a tick later than this, with the clock where it was, is a stopped clock
         self._silent_after_s = period_s + cfg.stale_timeout_s
-        self._last_tick_s, self._last_tick_ns = time.monotonic(), self._now_ns()
+        self._last_tick_s = time.monotonic()
+        # the clock as the watchdog last read it, and when (steady time) it last moved: a
+        # clock paused between two ticks stands still here, never at the last tick's value
+        self._watched_ns, self._clock_moved_s = self._now_ns(), self._last_tick_s
         self.create_timer(period_s, self._on_clock_watchdog,
                           clock=Clock(clock_type=ClockType.STEADY_TIME))
         self._next_save_s = time.monotonic() + cfg.baseline_save_period_s
@@ -287,20 +290,20 @@ class TorqueEstimatorNode(Node):
         return on_event
 
     def _on_diagnostics_timer(self) -> None:
-        self._last_tick_s, self._last_tick_ns = time.monotonic(), self._now_ns()
+        self._last_tick_s = time.monotonic()
         self._publish_status('')
 
     def _on_clock_watchdog(self) -> None:
         """Publish STALE and save on while the node's clock stops the diagnostics timer."""
-        silent_s = time.monotonic() - self._last_tick_s
+        steady_s, now = time.monotonic(), self._now_ns()
+        if now != self._watched_ns:  # it moved (forward, or back: a jump), since last read
+            self._watched_ns, self._clock_moved_s = now, steady_s
+        silent_s = steady_s - max(self._last_tick_s, self._clock_moved_s)
         if silent_s < self._silent_after_s or not self.get_parameter('use_sim_time').value:
-            return  # (a system clock never stops: a late tick is a busy executor)
-        now = self._now_ns()
-        if now != self._last_tick_ns:  # simulated time slower than real time: it still ticks
-            return
+            return  # slower than real time it still ticks; a system clock never stops
         why = ('use_sim_time is true and no /clock has come' if now == 0 else
-               f"the node's clock has not advanced for {silent_s:.0f} s (use_sim_time is "
-               'true: /clock stopped or paused)')
+               f"the node's clock has not advanced for {steady_s - self._clock_moved_s:.0f} s"
+               ' (use_sim_time is true: /clock stopped or paused)')
         self._publish_status(why)
 
     def _publish_status(self, clock_stopped: str) -> None:
