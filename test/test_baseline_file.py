@@ -29,6 +29,7 @@ from pump_friction_ros.core.baseline_file import (
     PROVENANCE_PARAMETERS,
     read_baseline,
     restore_baseline,
+    writable_folder,
     write_baseline,
 )
 from pump_friction_ros.core.baseline_store import (
@@ -493,6 +494,24 @@ def test_archive_never_moves_a_named_pipe_or_device_aside(tmp_path):
     with pytest.raises(OutputError, match='not a regular file'):
         archive_baseline(fifo)
     assert fifo.is_fifo() and os.listdir(tmp_path) == ['baseline.yaml']
+
+
+def test_a_baseline_file_behind_a_symbolic_link_is_written_and_reset_there(table, tmp_path):
+    """A link to a persistent volume stays a link: the file it names is written and moved."""
+    volume = tmp_path / 'volume'
+    volume.mkdir()
+    link = tmp_path / 'baseline.yaml'
+    link.symlink_to(volume / 'eha1.yaml')
+    write_baseline(link, baseline_document(make(table)))  # a dangling link: its file made
+    write_baseline(link, baseline_document(learnt_core(table)))
+    assert link.is_symlink() and (volume / 'eha1.yaml').is_file()
+    assert sorted(os.listdir(tmp_path)) == ['baseline.yaml', 'volume']
+    assert read_baseline(link) == read_baseline(volume / 'eha1.yaml')
+    aside = archive_baseline(link)
+    assert aside is not None and aside.parent == volume and link.is_symlink()
+    assert not (volume / 'eha1.yaml').exists()
+    writable_folder(link)
+    assert sorted(os.listdir(volume)) == [aside.name]  # the probe left nothing
 
 
 def test_default_file_is_under_ros_home_named_after_the_node(monkeypatch, tmp_path):

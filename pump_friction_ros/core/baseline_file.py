@@ -263,21 +263,22 @@ def write_baseline(path: Path, document: dict[str, Any]) -> None:
     except yaml.YAMLError as exc:
         raise BaselineError(f'baseline for {path}: not plain values: {exc}') from None
     _refuse_special(path)
+    real = _through_links(path)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.tmp', dir=path.parent)
+        real.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f'.{real.name}.', suffix='.tmp', dir=real.parent)
         try:
             with os.fdopen(fd, 'w', encoding='utf-8') as handle:
-                if path.is_file():
-                    os.fchmod(handle.fileno(), stat.S_IMODE(path.stat().st_mode))
+                if real.is_file():
+                    os.fchmod(handle.fileno(), stat.S_IMODE(real.stat().st_mode))
                 handle.write(text)
                 handle.flush()
                 os.fsync(handle.fileno())
-            os.replace(tmp, path)
+            os.replace(tmp, real)
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
-        _fsync_folder(path.parent)
+        _fsync_folder(real.parent)
     except OSError as exc:
         raise OutputError(f'cannot write baseline file {path}: '
                           f'{exc.strerror or type(exc).__name__}') from None
@@ -301,11 +302,12 @@ def writable_folder(path: Path) -> None:
         It cannot (one line, with the reason, as `write_baseline` would say it).
 
     """
-    missing = [folder for folder in (path.parent, *path.parent.parents) if not folder.exists()]
     _refuse_special(path)
+    real = _through_links(path)
+    missing = [folder for folder in (real.parent, *real.parent.parents) if not folder.exists()]
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f'.{path.name}.', suffix='.probe', dir=path.parent)
+        real.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f'.{real.name}.', suffix='.probe', dir=real.parent)
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:
@@ -313,6 +315,17 @@ def writable_folder(path: Path) -> None:
                           f'{exc.strerror or type(exc).__name__}') from None
     finally:
         remove_empty_folders(missing)
+
+
+def _through_links(path: Path) -> Path:
+    """
+    Return the file a symbolic link names (itself if it is none), to write in its place.
+
+    A baseline file kept elsewhere (a persistent volume) through a link stays there: a
+    rename onto the link would replace the link with a plain file.
+
+    """
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
 def _refuse_special(path: Path) -> None:
@@ -475,10 +488,11 @@ def archive_baseline(path: Path) -> Path | None:
         reason).
 
     """
+    given, path = path, _through_links(path)  # the linked file is moved; the link stays
     if path.is_dir():
-        raise OutputError(f'baseline file {path} is a folder: not moved aside')
+        raise OutputError(f'baseline file {given} is a folder: not moved aside')
     if path.exists() and not path.is_file():  # a reset must never replace /dev/null
-        raise OutputError(f'baseline file {path} is not a regular file (a device, a named '
+        raise OutputError(f'baseline file {given} is not a regular file (a device, a named '
                           'pipe or a socket): not moved aside')
     stamp = time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())
     target = path.with_name(f'{path.name}.{stamp}.bak')
@@ -490,10 +504,10 @@ def archive_baseline(path: Path) -> Path | None:
         os.replace(path, target)
     except FileNotFoundError as exc:
         if path.exists():  # it is there, the rename cannot move it (a special file system)
-            raise OutputError(f'cannot move baseline file {path} aside: {exc.strerror}'
+            raise OutputError(f'cannot move baseline file {given} aside: {exc.strerror}'
                               ) from None
         return None
     except OSError as exc:
-        raise OutputError(f'cannot move baseline file {path} aside: '
+        raise OutputError(f'cannot move baseline file {given} aside: '
                           f'{exc.strerror or type(exc).__name__}') from None
     return target
