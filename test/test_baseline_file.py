@@ -21,15 +21,14 @@ import os
 from pathlib import Path
 
 import numpy as np
-from pump_friction_ros.core import baseline_file
+from pump_friction_ros.core import baseline_disk, baseline_file
+from pump_friction_ros.core.baseline_disk import archive_baseline, writable_folder
 from pump_friction_ros.core.baseline_file import (
-    archive_baseline,
     baseline_document,
     load_baseline,
     PROVENANCE_PARAMETERS,
     read_baseline,
     restore_baseline,
-    writable_folder,
     write_baseline,
 )
 from pump_friction_ros.core.baseline_store import (
@@ -222,7 +221,7 @@ def test_a_crash_mid_write_leaves_the_old_file_intact(table, tmp_path, monkeypat
     def crash(*args):
         raise OSError(28, 'No space left on device')
 
-    monkeypatch.setattr(baseline_file.os, 'replace', crash)
+    monkeypatch.setattr(baseline_disk.os, 'replace', crash)
     with pytest.raises(OutputError, match='No space left on device') as info:
         write_baseline(path, baseline_document(learnt_core(table)))
     assert '\n' not in str(info.value)
@@ -238,7 +237,7 @@ def test_an_interrupt_mid_write_leaves_the_old_file_intact(table, tmp_path, monk
     def interrupted(fd):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(baseline_file.os, 'fsync', interrupted)
+    monkeypatch.setattr(baseline_disk.os, 'fsync', interrupted)
     with pytest.raises(KeyboardInterrupt):
         write_baseline(path, baseline_document(learnt_core(table)))
     assert path.read_bytes() == old

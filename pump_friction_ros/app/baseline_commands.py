@@ -84,13 +84,13 @@ def cmd_learn_baseline(args: argparse.Namespace) -> int:
     from ..bags.fleet import discover_bags, refuse_repeats
     from ..bags.reader import parse_remaps
     from ..bags.replay import replay_bag
+    from ..core.baseline_disk import writable_folder
     from ..core.baseline_file import (
         baseline_document,
         provenance,
         provenance_differences,
         read_baseline,
         restore_baseline,
-        writable_folder,
         write_baseline,
     )
     from ..core.estimator_setup import estimator_from_config
@@ -178,7 +178,8 @@ def cmd_reset_baseline(args: argparse.Namespace) -> int:
         0.
 
     """
-    from ..core.baseline_file import archive_baseline, read_baseline
+    from ..core.baseline_disk import archive_baseline
+    from ..core.baseline_file import read_baseline
     from ..interrupts import note_committed
 
     path = Path(args.file).expanduser().absolute()

@@ -22,29 +22,26 @@ that change the residual or what the monitor learns from (`PROVENANCE_PARAMETERS
 is used only by an estimator of the same provenance: the state of another pump, table or
 parameters is refused with one line naming what differs (`BaselineMismatchError`).
 
-Written atomically (`write_baseline`: a temporary file in the same folder, flushed and
-fsynced, then ``os.replace``), so a crash or power cut leaves the previous file or the new
-one, never half of one. ``baseline_store`` is the node's side (load at start, save, reset
-after a repair, the status for /diagnostics). docs/node.md, "The healthy baseline file".
+Written atomically (`write_baseline`, through ``baseline_disk.replace_file``: a temporary
+file in the same folder, flushed and fsynced, then ``os.replace``), so a crash or power cut
+leaves the previous file or the new one, never half of one. ``baseline_store`` is the
+node's side (load at start, save, reset after a repair, the status for /diagnostics).
+docs/node.md, "The healthy baseline file".
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import os
 from pathlib import Path
-import stat
-import tempfile
 import time
 from typing import Any, TYPE_CHECKING
 
 import yaml
 
+from .baseline_disk import replace_file
 from .. import __version__, MODEL_VERSION
-from ..errors import BaselineError, BaselineMismatchError, ConfigError, OutputError, quote
-from ..input_files import special_kind
-from ..staging import remove_empty_folders
+from ..errors import BaselineError, BaselineMismatchError, ConfigError, quote
 from ..yaml_files import read_yaml, SafeDumper
 
 if TYPE_CHECKING:
@@ -53,9 +50,9 @@ if TYPE_CHECKING:
     from ..table.friction_table import FrictionTable
 
 __all__ = ['BASELINE_FORMAT', 'BASELINE_FORMAT_VERSION', 'PROVENANCE_PARAMETERS',
-           'archive_baseline', 'baseline_document', 'load_baseline', 'provenance',
-           'provenance_differences', 'read_baseline', 'restore_baseline', 'table_fingerprint',
-           'utc_now', 'writable_folder', 'write_baseline']
+           'baseline_document', 'load_baseline', 'provenance', 'provenance_differences',
+           'read_baseline', 'restore_baseline', 'table_fingerprint', 'utc_now',
+           'write_baseline']
 
 BASELINE_FORMAT = 'pump_friction_ros healthy baseline'
 BASELINE_FORMAT_VERSION = 1
@@ -262,92 +259,7 @@ def write_baseline(path: Path, document: dict[str, Any]) -> None:
                                    default_flow_style=False, allow_unicode=True)
     except yaml.YAMLError as exc:
         raise BaselineError(f'baseline for {path}: not plain values: {exc}') from None
-    _refuse_special(path)
-    real = _through_links(path)
-    try:
-        real.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f'.{real.name}.', suffix='.tmp', dir=real.parent)
-        try:
-            with os.fdopen(fd, 'w', encoding='utf-8') as handle:
-                if real.is_file():
-                    os.fchmod(handle.fileno(), stat.S_IMODE(real.stat().st_mode))
-                handle.write(text)
-                handle.flush()
-                os.fsync(handle.fileno())
-            os.replace(tmp, real)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        _fsync_folder(real.parent)
-    except OSError as exc:
-        raise OutputError(f'cannot write baseline file {path}: '
-                          f'{exc.strerror or type(exc).__name__}') from None
-
-
-def writable_folder(path: Path) -> None:
-    """
-    Check that `write_baseline` can write ``path``: its folder made, a file made in it.
-
-    The folders made for the check and the file are removed again: a run that fails later
-    leaves nothing behind (`write_baseline` makes them when it writes).
-
-    Parameters
-    ----------
-    path : Path
-        The baseline file to be written.
-
-    Raises
-    ------
-    OutputError
-        It cannot (one line, with the reason, as `write_baseline` would say it).
-
-    """
-    _refuse_special(path)
-    real = _through_links(path)
-    missing = [folder for folder in (real.parent, *real.parent.parents) if not folder.exists()]
-    try:
-        real.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f'.{real.name}.', suffix='.probe', dir=real.parent)
-        os.close(fd)
-        os.unlink(tmp)
-    except OSError as exc:
-        raise OutputError(f'cannot write baseline file {path}: '
-                          f'{exc.strerror or type(exc).__name__}') from None
-    finally:
-        remove_empty_folders(missing)
-
-
-def _through_links(path: Path) -> Path:
-    """
-    Return the file a symbolic link names (itself if it is none), to write in its place.
-
-    A baseline file kept elsewhere (a persistent volume) through a link stays there: a
-    rename onto the link would replace the link with a plain file.
-
-    """
-    return Path(os.path.realpath(path)) if path.is_symlink() else path
-
-
-def _refuse_special(path: Path) -> None:
-    """Refuse to replace /dev/null or a named pipe with a baseline file (`OutputError`)."""
-    special = special_kind(path)
-    if special:
-        raise OutputError(f'cannot write baseline file {path}: it is {special}, not a '
-                          'regular file: not replaced')
-
-
-def _fsync_folder(folder: Path) -> None:
-    """Make the rename durable (a power cut after it keeps the new file); best effort."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
+    replace_file(path, text)
 
 
 def read_baseline(path: Path) -> dict[str, Any]:
@@ -465,49 +377,3 @@ def load_baseline(core: TorqueEstimator, path: Path) -> dict[str, Any]:
     document = read_baseline(path)
     restore_baseline(core, document, path)
     return document
-
-
-def archive_baseline(path: Path) -> Path | None:
-    """
-    Move a baseline file aside as ``<name>.<UTC time>.bak``, so that it is re-learnt.
-
-    Parameters
-    ----------
-    path : Path
-        The file.
-
-    Returns
-    -------
-    Path or None
-        Where it went; None when there was no file.
-
-    Raises
-    ------
-    OutputError
-        It is a folder or not a regular file, or cannot be moved (one line, with the
-        reason).
-
-    """
-    given, path = path, _through_links(path)  # the linked file is moved; the link stays
-    if path.is_dir():
-        raise OutputError(f'baseline file {given} is a folder: not moved aside')
-    if path.exists() and not path.is_file():  # a reset must never replace /dev/null
-        raise OutputError(f'baseline file {given} is not a regular file (a device, a named '
-                          'pipe or a socket): not moved aside')
-    stamp = time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())
-    target = path.with_name(f'{path.name}.{stamp}.bak')
-    n = 1
-    while target.exists():
-        n += 1
-        target = path.with_name(f'{path.name}.{stamp}-{n}.bak')
-    try:
-        os.replace(path, target)
-    except FileNotFoundError as exc:
-        if path.exists():  # it is there, the rename cannot move it (a special file system)
-            raise OutputError(f'cannot move baseline file {given} aside: {exc.strerror}'
-                              ) from None
-        return None
-    except OSError as exc:
-        raise OutputError(f'cannot move baseline file {given} aside: '
-                          f'{exc.strerror or type(exc).__name__}') from None
-    return target

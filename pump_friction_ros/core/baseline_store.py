@@ -30,8 +30,8 @@ import os
 from pathlib import Path
 from typing import Any, TYPE_CHECKING
 
+from .baseline_disk import archive_baseline
 from .baseline_file import (
-    archive_baseline,
     baseline_document,
     load_baseline,
     read_baseline,
