@@ -244,6 +244,50 @@ def test_a_clock_paused_between_two_diagnostics_ticks_goes_on_stale_and_says_why
         node.destroy_node()
 
 
+@pytest.mark.parametrize('section, line, refused', [
+    ('/**/torque_estimator', 'output_decimation: 20.0', 'output_decimation'),  # rcl drops it
+    ('/**/torque_estimator', 'max_input_age_s: "0.1"', 'max_input_age_s'),
+    ('/**/torque_estimator', 'reliable_inputs: 1', 'reliable_inputs'),
+    ('/**/torque_estimator', 'joint_name: [a, b]', 'joint_name'),
+    ('torque_estimator', 'joint_nam: motor_shaft', 'joint_nam'),  # rclpy ignores it
+    ('/**', 'output_decimation: 20.0', 'output_decimation'),
+    ('/**', 'frame_id: base_link', None),  # a shared section: another node's parameter
+    ('/other_node', 'joint_nam: motor_shaft', None),  # not this node's section
+    ('/**/torque_estimator', 'output_decimation: 20', None),  # a good override
+])
+def test_a_second_params_file_the_node_would_ignore_stops_it_naming_the_parameter(
+        table_file, tmp_path, section, line, refused):
+    later = tmp_path / 'site.yaml'
+    later.write_text(f'{section}:\n  ros__parameters:\n    {line}\n')
+    args = ['--ros-args', '--params-file', str(PARAMS), '--params-file', str(SAMPLE_PARAMS),
+            '--params-file', str(later), '-p', f'table_file:={table_file}']
+    rclpy.init(args=args)
+    try:
+        if refused is None:
+            node = TorqueEstimatorNode(args)
+            if line.startswith('output_decimation'):
+                assert node.config.output_decimation == 20
+            node.destroy_node()
+        else:
+            with pytest.raises(PumpFrictionError, match=refused) as info:
+                TorqueEstimatorNode(args)  # by rclpy (one file) or by the check, naming it
+            assert '\n' not in str(info.value)
+            assert isinstance(info.value, ConfigError) <= (str(later) in str(info.value))
+    finally:
+        rclpy.try_shutdown()
+
+
+def test_a_misspelt_p_rule_stops_the_node_naming_it(table_file):
+    args = ['--ros-args', '--params-file', str(PARAMS), '-p', f'table_file:={table_file}',
+            '-p', 'joint_nam:=motor_shaft']
+    rclpy.init(args=args)
+    try:
+        with pytest.raises(ConfigError, match='joint_nam:=motor_shaft: unknown parameter'):
+            TorqueEstimatorNode(args)
+    finally:
+        rclpy.try_shutdown()
+
+
 def test_parameters_come_from_the_yaml_file(ros, table_file):
     node = ros()
     try:

@@ -44,12 +44,14 @@ __all__ = [
     'BAG_PARAMS_FILE',
     'NODE_NAME',
     'PARAMETERS',
+    'ROS_PARAMETERS',
     'EstimatorConfig',
     'ParameterSpec',
     'PressureSource',
     'SpeedSource',
     'TorqueSource',
     'ViscositySource',
+    'checked_values',
     'config_from_mapping',
     'load_estimator_config',
     'quote',
@@ -457,13 +459,40 @@ def config_from_mapping(values: dict[str, Any], where: str = '',
         parameter naming no file.
 
     """
-    return _resolved(_checked(values, where), origins or {}, default_origin)
+    return _resolved(checked_values(values, where), origins or {}, default_origin)
 
 
-def _checked(values: dict[str, Any], where: str, ros_types: bool = False
-             ) -> dict[str, Any]:
-    """Return the values converted to their parameters' types, or raise ConfigError."""
-    unknown = sorted(map(str, set(values) - set(_SPECS) - {'use_sim_time'}))
+ROS_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
+"""Parameters rclpy declares on every node: allowed beside the estimator's, not checked."""
+
+
+def checked_values(values: dict[str, Any], where: str, ros_types: bool = False
+                   ) -> dict[str, Any]:
+    """
+    Return parameter values converted to their parameters' types.
+
+    Parameters
+    ----------
+    values : dict
+        Parameter name to value, as read (``ROS_PARAMETERS`` are left out of the result).
+    where : str
+        Prefix for error messages (e.g. the file name).
+    ros_types : bool
+        Refuse what rclpy would refuse (an integer for a double, a string for a number).
+
+    Returns
+    -------
+    dict
+        The estimator's parameters among them, each of its declared type.
+
+    Raises
+    ------
+    ConfigError
+        One message naming the unknown parameters, or the first mistyped or out-of-range
+        one.
+
+    """
+    unknown = sorted(map(str, set(values) - set(_SPECS) - ROS_PARAMETERS))
     if unknown:
         raise ConfigError(f'{where}unknown parameter(s): '
                           f'{", ".join(quote(u) for u in unknown)}')
@@ -539,7 +568,7 @@ def load_estimator_config(paths: str | Path | Sequence[str | Path] | None
     origins: dict[str, str] = {}
     for path in map(Path, paths):
         # errors name the file; numbers of the node's types, or the node would refuse it
-        values = _checked(_read_params_file(path), f'{path}: ', ros_types=True)
+        values = checked_values(_read_params_file(path), f'{path}: ', ros_types=True)
         merged.update(values)
         origins.update(dict.fromkeys(values, f'params file {path}'))
     return _resolved(merged, origins, '')

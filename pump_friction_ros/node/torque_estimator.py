@@ -23,7 +23,7 @@ and keeps its QoS event handlers to the one that can fire.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 import math
 from pathlib import Path
 import sys
@@ -74,6 +74,7 @@ from ..core.inputs import (
     TEMPERATURE,
 )
 from ..core.node_parameters import config_from_mapping, NODE_NAME, PARAMETERS, ParameterSpec
+from ..core.params_check import check_command_line
 from ..errors import PumpFrictionError
 from ..messages.cdr_message import MessageDecoder
 from ..messages.conversions import (
@@ -152,9 +153,20 @@ def _descriptor(spec: ParameterSpec) -> ParameterDescriptor:
 
 
 class TorqueEstimatorNode(Node):
-    """Subscribes to shaft speed, pressure and motor torque; publishes the estimates."""
+    """
+    Subscribes to shaft speed, pressure and motor torque; publishes the estimates.
 
-    def __init__(self, **node_kwargs: Any) -> None:
+    Parameters
+    ----------
+    command_line : sequence of str
+        The node's command line (``sys.argv``): its parameters files and ``-p`` rules are
+        checked as the replay checks them (``core.params_check``); empty: not checked.
+    **node_kwargs
+        rclpy ``Node`` arguments (``cli_args`` is checked with the command line).
+
+    """
+
+    def __init__(self, command_line: Sequence[str] = (), **node_kwargs: Any) -> None:
         try:  # rclpy's own parameters (use_sim_time:=1 is an integer, not a bool)
             super().__init__(NODE_NAME, **node_kwargs)
         except ParameterException as exc:
@@ -166,6 +178,10 @@ class TorqueEstimatorNode(Node):
             except (InvalidParameterValueException, InvalidParameterTypeException) as exc:
                 raise PumpFrictionError(f'parameter {spec.name}: {exc}') from None
             values[spec.name] = self.get_parameter(spec.name).value
+        # what rcl's merge of several files drops, and names no parameter takes (the
+        # command line: rclpy keeps no list of its files)
+        check_command_line([*command_line, *(node_kwargs.get('cli_args') or [])],
+                           self.get_fully_qualified_name())
         self.config = config_from_mapping(values, 'parameter ',
                                           default_origin='a node parameter')
         self.core = estimator_from_config(self.config)
@@ -408,7 +424,7 @@ def run(args: list[str] | None, stop: StopSignals) -> int:
     refused = False
     try:
         if not stop.received:  # else a signal came before rclpy's handler was there
-            node = TorqueEstimatorNode()
+            node = TorqueEstimatorNode(sys.argv if args is None else args)
             executor.add_node(node)
             _spin(executor, node)
     except PumpFrictionError as exc:
