@@ -134,6 +134,17 @@ def _numpy_scalar(dumper: yaml.SafeDumper, value: np.generic) -> yaml.Node:
     return dumper.represent_data(value.item())
 
 
+def _text(dumper: yaml.SafeDumper, value: str) -> yaml.Node:
+    """Represent a string; bytes of a file name that were not UTF-8 are written escaped."""
+    try:
+        value.encode('utf-8')
+    except UnicodeEncodeError:  # lone surrogates: a bag found in a folder, named in Latin-1
+        value = value.encode('utf-8', 'surrogateescape').decode('utf-8', 'backslashreplace')
+    return dumper.represent_str(value)
+
+
+SafeDumper.add_representer(str, _text)
+
 # a numpy float is a subclass of float, but PyYAML's safe dumper matches types exactly and
 # refuses it: a state with one in it (the monitor's, the isolation's sums) was not written
 SafeDumper.add_multi_representer(np.generic, _numpy_scalar)

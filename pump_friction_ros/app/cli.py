@@ -30,6 +30,7 @@ import numpy as np
 from . import data_commands
 from .arguments import bounded_float, bounded_int, Parser, SEED
 from .baseline_commands import add_baseline_commands
+from .console import GuardedStdout, non_utf8_argument
 from .. import __version__, MODEL_VERSION
 from ..calibration.fit import NAMES as FIT_NAMES
 from ..errors import PumpFrictionError
@@ -419,6 +420,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         on SIGTERM.
 
     """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    stdout, sys.stdout = sys.stdout, GuardedStdout(sys.stdout)  # a print never stops a write
+    try:
+        code = _run(argv)
+    finally:
+        guarded, sys.stdout = sys.stdout, stdout
+    lost = guarded.finish() if isinstance(guarded, GuardedStdout) else ''
+    return _fail(lost) if lost and code == 0 else code
+
+
+def _run(argv: list[str]) -> int:
+    """Run one command; every failure is one line and an exit code (`main`)."""
+    bad = non_utf8_argument(argv)
+    if bad:  # it would reach a file's provenance, which is UTF-8 text
+        return _fail(f"argument '{bad}' is not valid UTF-8 (a file name in another "
+                     'encoding?): rename it')
     try:
         sigint_kept()  # in the try: a Ctrl-C from here on is one line (entry: before)
         args = build_parser().parse_args(argv)
