@@ -29,7 +29,7 @@ from pump_friction_ros.table.friction_table import (
     TableSpec,
     VISCOSITY_CLAMPED,
 )
-from pump_friction_ros.table.table_files import cached_table, load_table
+from pump_friction_ros.table.table_files import cached_table, cached_table_path, load_table
 import pytest
 from scipy.interpolate import RegularGridInterpolator
 
@@ -248,6 +248,18 @@ def test_default_table_is_built_once_then_cached_under_its_hash(tmp_path, monkey
     files[0].write_bytes(b'corrupt')  # a damaged cache entry is rebuilt, not trusted
     third = cached_table(paper_params)
     np.testing.assert_array_equal(third.torque_nm, first.torque_nm)
+
+
+@pytest.mark.parametrize('name', ['/abs/x', '../..', 'a/b', 'x' * 300, '..', 'p\udcff e'])
+def test_a_pump_name_never_leads_the_cached_table_out_of_the_cache_folder(
+        tmp_path, monkeypatch, paper_params, name):
+    from dataclasses import replace
+    monkeypatch.setenv('XDG_CACHE_HOME', str(tmp_path))
+    path = cached_table_path(replace(paper_params, name=name))
+    assert path.parent == tmp_path / 'pump_friction_ros'
+    assert not path.name.startswith('.') and len(path.name) < 200
+    path.name.encode('ascii')  # a plain name on every file system
+    assert path != cached_table_path(replace(paper_params, name='other'))
 
 
 def test_bad_table_spec_is_refused():

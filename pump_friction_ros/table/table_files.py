@@ -22,6 +22,7 @@ import json
 import math
 import os
 from pathlib import Path
+import re
 
 import numpy as np
 
@@ -148,14 +149,27 @@ def cached_table_path(params: PumpParams, spec: TableSpec | None = None) -> Path
     Returns
     -------
     Path
-        ``<cache dir>/<name>-<hash>-nu<low>-<high>cSt-s<grid hash>-m<model version>.npz``.
+        ``<cache dir>/<name>-<hash>-nu<low>-<high>cSt-s<grid hash>-m<model version>.npz``,
+        the name made a plain file-name part (`_file_safe`).
 
     """
     spec = spec or TableSpec()
     key = hashlib.sha256(repr(spec).encode()).hexdigest()[:8]
     low, high = m2_s_to_cst(spec.min_viscosity_m2_s), m2_s_to_cst(spec.max_viscosity_m2_s)
-    return cache_dir() / (f'{params.name}-{params.sha256[:16]}-nu{low:.3g}-{high:.4g}cSt-'
-                          f's{key}-m{MODEL_VERSION}.npz')
+    return cache_dir() / (f'{_file_safe(params.name)}-{params.sha256[:16]}-nu{low:.3g}-'
+                          f'{high:.4g}cSt-s{key}-m{MODEL_VERSION}.npz')
+
+
+def _file_safe(name: str) -> str:
+    """
+    Return a pump name as one plain file-name part: ``/abs/x`` or ``../..`` stays in the cache.
+
+    Letters, digits, ``.``, ``_`` and ``-`` are kept, anything else (a slash, a space, a
+    byte of another encoding) is ``_``, leading dots dropped, at most 64 characters; the
+    parameter hash beside it tells pumps apart.
+
+    """
+    return re.sub(r'[^A-Za-z0-9._-]', '_', name).lstrip('.')[:64] or 'pump'
 
 
 def cached_table(params: PumpParams, progress: Callable[[float], None] | None = None,
