@@ -79,3 +79,13 @@ def pytest_configure(config):
 def level_from_msg(level):
     """Return a DiagnosticStatus level as an int, from rclpy (bytes) or rosbags (int)."""
     return level[0] if isinstance(level, (bytes, bytearray)) else int(level)
+
+
+@pytest.fixture(scope='module')
+def env(tmp_path_factory):
+    """Environment of ``pump_friction`` subprocesses: a private table cache per module."""
+    values = dict(os.environ)
+    values['XDG_CACHE_HOME'] = str(tmp_path_factory.mktemp('cache'))
+    values['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO),
+                                                         values.get('PYTHONPATH', '')]))
+    return values

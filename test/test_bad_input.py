@@ -33,16 +33,6 @@ from .conftest import PAPER_PUMP
 REPO = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope='module')
-def env(tmp_path_factory):
-    """Environment of the subprocesses: a private table cache shared by this module."""
-    values = dict(os.environ)
-    values['XDG_CACHE_HOME'] = str(tmp_path_factory.mktemp('cache'))
-    values['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO),
-                                                         values.get('PYTHONPATH', '')]))
-    return values
-
-
 def cli(env, *argv, cwd=None, timeout=60):
     """Run ``pump_friction`` in a subprocess; a hang fails the test after ``timeout`` s."""
     return subprocess.run([sys.executable, '-m', 'pump_friction_ros.app.cli', *map(str, argv)],

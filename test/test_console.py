@@ -33,21 +33,12 @@ BAG = REPO / 'bags' / 'eha_nominal'
 PARAMS = REPO / 'bags' / 'eha_params.yaml'
 
 
-@pytest.fixture(scope='module')
-def env(tmp_path_factory):
-    values = dict(os.environ)
-    values['XDG_CACHE_HOME'] = str(tmp_path_factory.mktemp('cache'))
-    values['PYTHONPATH'] = os.pathsep.join(filter(None, [str(REPO),
-                                                         values.get('PYTHONPATH', '')]))
-    return values
-
-
 def command(*argv):
     return [sys.executable, '-m', 'pump_friction_ros.app.cli', *map(os.fsencode, argv)]
 
 
-def test_a_reader_that_closes_the_pipe_does_not_stop_the_baseline_being_written(env,
-                                                                                 tmp_path):
+def test_a_reader_that_closes_the_pipe_does_not_stop_the_baseline_being_written(
+        env, tmp_path):
     out = tmp_path / 'b.yaml'
     proc = subprocess.Popen(command('learn-baseline', BAG, '--params', PARAMS, '--out', out),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
@@ -58,8 +49,8 @@ def test_a_reader_that_closes_the_pipe_does_not_stop_the_baseline_being_written(
     assert read_baseline(out)['learnt']['samples'] > 0
 
 
-def test_a_full_standard_output_still_writes_the_baseline_and_says_what_was_lost(env,
-                                                                                 tmp_path):
+def test_a_full_standard_output_still_writes_the_baseline_and_says_what_was_lost(
+        env, tmp_path):
     if not os.path.exists('/dev/full'):
         pytest.skip('no /dev/full on this system')
     out = tmp_path / 'b.yaml'
@@ -87,8 +78,8 @@ def test_a_file_name_argument_that_is_not_utf8_is_refused_in_one_line(env, tmp_p
     assert not (tmp_path / 'b.yaml').exists()
 
 
-def test_a_fleet_bag_named_in_another_encoding_is_learnt_its_name_written_escaped(env,
-                                                                                  tmp_path):
+def test_a_fleet_bag_named_in_another_encoding_is_learnt_its_name_written_escaped(
+        env, tmp_path):
     fleet = tmp_path / 'fleet'
     shutil.copytree(BAG, os.fsdecode(os.fsencode(fleet) + b'/run\xff'))
     out = tmp_path / 'b.yaml'
