@@ -39,8 +39,8 @@ import sys
 
 from .errors import ConfigError, quote
 
-__all__ = ['PACKAGE', 'config_dir', 'default_pump_file', 'package_share_dir', 'resolve_path',
-           'shipped_pump_sets']
+__all__ = ['PACKAGE', 'config_dir', 'created_file_mode', 'default_pump_file',
+           'package_share_dir', 'resolve_path', 'shipped_pump_sets']
 
 PACKAGE = 'pump_friction_ros'
 _SCHEME = 'package://'
@@ -198,3 +198,29 @@ def resolve_path(value: str | Path, what: str, *, origin: str = '', pump_set: bo
                        if pump_set else ''))
         raise ConfigError(f'{what} {quote(text)}{source} {state}: {path} ({how}){hint}')
     return path
+
+
+def created_file_mode() -> int:
+    """
+    Return the permissions an ``open()`` would give a new file: 0o666 less the umask.
+
+    ``tempfile.mkstemp`` makes its file 0o600; a file written through one (a baseline, a
+    table) is given these instead, so that the node's user can read a baseline that the
+    maintenance user learnt, as it could a file copied there.
+
+    Returns
+    -------
+    int
+        The mode bits.
+
+    """
+    try:  # Linux: read, never set (os.umask would change it for every thread a moment)
+        with open('/proc/self/status', encoding='ascii') as status:
+            for line in status:
+                if line.startswith('Umask:'):
+                    return 0o666 & ~int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask

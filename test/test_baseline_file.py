@@ -466,6 +466,17 @@ def test_a_file_name_too_long_for_the_file_system_is_one_line_and_never_raises(
     assert baseline.status.startswith('not used: ') and baseline.errors == 1
 
 
+@pytest.mark.parametrize('umask', [0o022, 0o027, 0o077])
+def test_a_new_baseline_file_gets_the_permissions_open_would_give_it(table, tmp_path, umask):
+    """Not mkstemp's 0o600: the node's user must read what the maintenance user learnt."""
+    old = os.umask(umask)
+    try:
+        write_baseline(tmp_path / 'b.yaml', baseline_document(make(table)))
+    finally:
+        os.umask(old)
+    assert (tmp_path / 'b.yaml').stat().st_mode & 0o777 == 0o666 & ~umask
+
+
 def test_an_existing_files_permissions_are_kept(table, tmp_path):
     path = tmp_path / 'baseline.yaml'
     write_baseline(path, baseline_document(make(table)))

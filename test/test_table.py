@@ -16,6 +16,7 @@
 
 import json
 import math
+import os
 
 import numpy as np
 from pump_friction_ros.errors import TableError
@@ -260,6 +261,16 @@ def test_a_pump_name_never_leads_the_cached_table_out_of_the_cache_folder(
     assert not path.name.startswith('.') and len(path.name) < 200
     path.name.encode('ascii')  # a plain name on every file system
     assert path != cached_table_path(replace(paper_params, name='other'))
+
+
+def test_a_saved_table_gets_the_permissions_open_would_give_a_new_file(tmp_path,
+                                                                         paper_table):
+    old = os.umask(0o027)
+    try:
+        path = paper_table.save(tmp_path / 't.npz')
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o640  # not mkstemp's 0o600
 
 
 def test_bad_table_spec_is_refused():

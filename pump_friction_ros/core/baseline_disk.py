@@ -33,6 +33,7 @@ import time
 
 from ..errors import OutputError
 from ..input_files import special_kind
+from ..paths import created_file_mode
 from ..staging import remove_empty_folders
 
 __all__ = ['archive_baseline', 'replace_file', 'writable_folder']
@@ -43,7 +44,7 @@ def replace_file(path: Path, text: str) -> None:
     Write ``text`` to ``path`` atomically: the old file, or the new one, never half of one.
 
     On any failure the temporary file is removed and ``path`` is left as it was. An
-    existing file's permissions are kept.
+    existing file's permissions are kept; a new one gets a new file's (the umask's).
 
     Parameters
     ----------
@@ -66,8 +67,8 @@ def replace_file(path: Path, text: str) -> None:
         fd, tmp = tempfile.mkstemp(prefix=f'.{real.name}.', suffix='.tmp', dir=real.parent)
         try:
             with os.fdopen(fd, 'w', encoding='utf-8') as handle:
-                if real.is_file():
-                    os.fchmod(handle.fileno(), stat.S_IMODE(real.stat().st_mode))
+                os.fchmod(handle.fileno(), stat.S_IMODE(real.stat().st_mode)
+                          if real.is_file() else created_file_mode())
                 handle.write(text)
                 handle.flush()
                 os.fsync(handle.fileno())

@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike
 
 from .. import __version__, MODEL_VERSION
 from ..errors import TableError
+from ..paths import created_file_mode
 from ..physics.friction import smooth_sign, smooth_sign_scalar
 from ..physics.model import (
     angle_count,
@@ -342,6 +343,7 @@ class FrictionTable:
         fd, tmp = tempfile.mkstemp(prefix=path.name + '.', suffix='.tmp', dir=path.parent)
         try:
             with os.fdopen(fd, 'wb') as handle:
+                os.fchmod(handle.fileno(), created_file_mode())  # not mkstemp's 0o600
                 handle.write(archive.getbuffer())
             os.replace(tmp, path)
         except BaseException:
