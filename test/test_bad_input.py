@@ -296,6 +296,25 @@ def test_the_time_span_comes_from_the_storage_not_an_edited_metadata_file(
                     if 'replayed in' not in line and 'out' not in line]
 
 
+def test_a_replay_whose_diagnostics_are_all_stale_does_not_just_say_no_alarm(env, tmp_path):
+    """Header stamps an hour behind the log time: the node's /diagnostics would be STALE."""
+    hour = 3600 * 10**9
+
+    def behind(k, fields):
+        return {**fields, 'stamp_ns': fields['stamp_ns'] - hour}
+
+    bag = write_bag(tmp_path / 'bag', n=5000, joint=behind, pressure=behind)
+    proc = cli(env, 'replay', bag, '--out', tmp_path / 'out')
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert '  no alarm' not in lines
+    assert '  no alarm from the monitor, but every /diagnostics status was STALE' in lines
+    stale = [line for line in lines if line.startswith('  /diagnostics STALE in ')]
+    assert len(stale) == 1 and 'stamped 3600 s before this clock' in stale[0]
+    good = cli(env, 'replay', write_bag(tmp_path / 'good', n=5000), '--out', tmp_path / 'o2')
+    assert '  no alarm' in good.stdout.splitlines() and 'STALE in' not in good.stdout
+
+
 @pytest.mark.parametrize(('remaps', 'words'), [
     (['joint_state:=/eha/js'], 'the node has no input /joint_state'),  # a typo
     (['joint_states:=/a:=/b'], "bad --topic-remap 'joint_states:=/a:=/b'"),

@@ -86,7 +86,8 @@ def cmd_replay(args: argparse.Namespace) -> int:
         print(f'{summary.label}: {summary.duration_s:.1f} s, {summary.estimates} estimates, '
               f'{alarm}, valve-plate scale {summary.final_valve_plate_scale:.3f} at the end'
               + ''.join(f', {kind} {path}' for kind, path in summary.outputs.items())
-              + summary.skipped())
+              + summary.skipped() + (f', {summary.stale_note()}' if summary.stale_ticks
+                                     else ''))
     print()
     print(fleet_table(summaries))
     failed = [s.label for s in summaries if s.error]

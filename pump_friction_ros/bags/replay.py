@@ -308,7 +308,9 @@ def _run(source: Source, core: TorqueEstimator, config: EstimatorConfig,
             if estimates is None:  # the node's diagnostics timer
                 if write is not None:
                     tick = log_ns[0]
-                    msg = diagnostic_array(types, core.diagnostics(tick), tick, status_name,
+                    status = core.diagnostics(tick)
+                    summary.count_status(status.level, status.message)
+                    msg = diagnostic_array(types, status, tick, status_name,
                                            config.hardware_id)
                     write(DIAGNOSTICS_INDEX, tick, bytes(typestore.serialize_cdr(
                         msg, 'diagnostic_msgs/msg/DiagnosticArray')))

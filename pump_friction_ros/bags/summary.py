@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import math
 
 from ..core.estimate_record import COUNTERS, Estimate
-from ..core.monitor import ERROR, WARN
+from ..core.monitor import ERROR, STALE, WARN
 
 __all__ = ['SKIP_COUNTERS', 'LevelTracker', 'ReplaySummary']
 
@@ -63,9 +63,44 @@ class ReplaySummary:
     elapsed_s: float = 0.0
     # the diagnostics timer's ticks left out in each gap of the log (`events.replay_batches`)
     diagnostics_gaps: list[int] = field(default_factory=list)
+    diagnostics_ticks: int = 0  # /diagnostics written (an output bag), and how many STALE
+    stale_ticks: int = 0
+    stale_message: str = ''  # the latest STALE status's message
     outputs: dict[str, str] = field(default_factory=dict)
     error: str = ''
     estimates_list: list[Estimate] | None = None
+
+    def count_status(self, level: int, message: str) -> None:
+        """
+        Count one /diagnostics status written, keeping the latest STALE one's message.
+
+        Parameters
+        ----------
+        level : int
+            Its level (``monitor.OK`` ... ``STALE``).
+        message : str
+            Its message.
+
+        """
+        self.diagnostics_ticks += 1
+        if level == STALE:
+            self.stale_ticks += 1
+            self.stale_message = message
+
+    def stale_note(self) -> str:
+        """
+        Say how many of the /diagnostics written were STALE, and why; '' if none.
+
+        Returns
+        -------
+        str
+            ``'/diagnostics STALE in 19 of 19 statuses (the latest: stale: ...)'``.
+
+        """
+        if not self.stale_ticks:
+            return ''
+        return (f'/diagnostics STALE in {self.stale_ticks} of {self.diagnostics_ticks} '
+                f'statuses (the latest: {self.stale_message})')
 
     @property
     def alarm_onset_s(self) -> float:
@@ -150,7 +185,9 @@ class ReplaySummary:
                  f'  WARN: {intervals(self.warn_intervals)}',
                  f'  ERROR: {intervals(self.error_intervals)}',
                  f'  first alarm at {self.alarm_onset_s:.1f} s' if self.warn_intervals
-                 or self.error_intervals else '  no alarm',
+                 or self.error_intervals else '  no alarm' if self.stale_ticks <
+                 self.diagnostics_ticks or not self.stale_ticks
+                 else '  no alarm from the monitor, but every /diagnostics status was STALE',
                  f'  final status: {self.attribution}',
                  f'  friction scales at the end: valve plate {self.final_valve_plate_scale:.3f}'
                  f' +- {1.96 * self.final_valve_plate_scale_std:.3f}, other components '
@@ -165,6 +202,9 @@ class ReplaySummary:
             lines.insert(1, f'  gaps in the log: {len(self.diagnostics_gaps)}, in which '
                          f'{sum(self.diagnostics_gaps)} ticks of /diagnostics are left out '
                          '(the STALE status the node would repeat)')
+        if self.stale_ticks:
+            lines.insert(lines.index(f'  final status: {self.attribution}'),
+                         f'  {self.stale_note()}')
         lines += [f'  {kind}: {path}' for kind, path in self.outputs.items()]
         return '\n'.join(lines)
 
