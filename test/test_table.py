@@ -263,8 +263,8 @@ def test_a_pump_name_never_leads_the_cached_table_out_of_the_cache_folder(
     assert path != cached_table_path(replace(paper_params, name='other'))
 
 
-def test_a_saved_table_gets_the_permissions_open_would_give_a_new_file(tmp_path,
-                                                                         paper_table):
+def test_a_saved_table_gets_the_permissions_open_would_give_a_new_file(
+        tmp_path, paper_table):
     old = os.umask(0o027)
     try:
         path = paper_table.save(tmp_path / 't.npz')
